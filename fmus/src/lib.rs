@@ -1,0 +1,1 @@
+//! PlaMo as an FMI 2.0 co-simulation FMU.

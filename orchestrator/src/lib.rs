@@ -1,0 +1,2 @@
+//! The PlaMo orchestrator: runs planner, controller and physics in lockstep.
+#![warn(missing_docs)]

@@ -1,0 +1,94 @@
+//! Oriented rectangles in the XY plane: the footprint of walls, ceilings and regions.
+
+use serde::{Deserialize, Serialize};
+
+/// An oriented rectangle in the XY plane.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Footprint {
+    /// Centre \[m\].
+    pub center: [f64; 2],
+    /// Half extents along the rectangle's own x and y axes \[m\], both > 0.
+    pub half_extents: [f64; 2],
+    /// Rotation about +Z \[rad\], counter-clockwise from world +X.
+    pub yaw: f64,
+}
+
+impl Footprint {
+    /// Axis-aligned rectangle.
+    pub fn axis_aligned(center: [f64; 2], half_extents: [f64; 2]) -> Self {
+        Self {
+            center,
+            half_extents,
+            yaw: 0.0,
+        }
+    }
+
+    /// The point expressed in the rectangle's frame.
+    pub fn to_local(&self, x: f64, y: f64) -> [f64; 2] {
+        let (s, c) = self.yaw.sin_cos();
+        let dx = x - self.center[0];
+        let dy = y - self.center[1];
+        [c * dx + s * dy, -s * dx + c * dy]
+    }
+
+    /// Signed distance from (x, y) to the rectangle: negative inside \[m\].
+    pub fn signed_distance(&self, x: f64, y: f64) -> f64 {
+        let [lx, ly] = self.to_local(x, y);
+        let qx = lx.abs() - self.half_extents[0];
+        let qy = ly.abs() - self.half_extents[1];
+        let outside = (qx.max(0.0).powi(2) + qy.max(0.0).powi(2)).sqrt();
+        let inside = qx.max(qy).min(0.0);
+        outside + inside
+    }
+
+    /// Whether (x, y) lies inside or on the boundary.
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        self.signed_distance(x, y) <= 0.0
+    }
+
+    /// The four corners, counter-clockwise.
+    pub fn corners(&self) -> [[f64; 2]; 4] {
+        let (s, c) = self.yaw.sin_cos();
+        let [hx, hy] = self.half_extents;
+        [[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]].map(|[lx, ly]| {
+            [
+                self.center[0] + c * lx - s * ly,
+                self.center[1] + s * lx + c * ly,
+            ]
+        })
+    }
+
+    /// Axis-aligned bounding box as (min, max).
+    pub fn aabb(&self) -> ([f64; 2], [f64; 2]) {
+        let cs = self.corners();
+        let mut lo = cs[0];
+        let mut hi = cs[0];
+        for p in &cs[1..] {
+            lo = [lo[0].min(p[0]), lo[1].min(p[1])];
+            hi = [hi[0].max(p[0]), hi[1].max(p[1])];
+        }
+        (lo, hi)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn signed_distance_of_rotated_box() {
+        let f = Footprint {
+            center: [1.0, 1.0],
+            half_extents: [2.0, 0.5],
+            yaw: std::f64::consts::FRAC_PI_2,
+        };
+        // Rotated 90 degrees: long axis along world Y.
+        assert!((f.signed_distance(1.0, 1.0) + 0.5).abs() < 1e-12);
+        assert!((f.signed_distance(1.0, 4.0) - 1.0).abs() < 1e-12);
+        assert!((f.signed_distance(2.5, 1.0) - 1.0).abs() < 1e-12);
+        assert!(f.contains(1.2, 2.9));
+        assert!(!f.contains(1.6, 1.0));
+        let (lo, hi) = f.aabb();
+        assert!((lo[0] - 0.5).abs() < 1e-12 && (hi[1] - 3.0).abs() < 1e-12);
+    }
+}
