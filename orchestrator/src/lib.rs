@@ -1,2 +1,5 @@
-//! The PlaMo orchestrator: runs planner, controller and physics in lockstep.
+//! The PlaMo orchestrator: runs planner, controller and physics in lockstep, and the
+//! pictures and recordings the `plamo` CLI writes.
 #![warn(missing_docs)]
+
+pub mod viz;

@@ -1,0 +1,28 @@
+//! Subcommands, one file each.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+mod scenes;
+
+/// PlaMo: plan and move a physics-simulated humanoid through rich 3D scenes.
+#[derive(Debug, Parser)]
+#[command(name = "plamo", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// List, show, validate, render and generate scenes.
+    #[command(subcommand)]
+    Scenes(scenes::ScenesCommand),
+}
+
+/// Run the parsed command; the exit code says whether it succeeded.
+pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
+    match cli.command {
+        Command::Scenes(cmd) => scenes::run(cmd),
+    }
+}

@@ -1,0 +1,1 @@
+//! Pictures: top-down scene maps with overlays, profile plots.
