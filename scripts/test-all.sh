@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# The project's whole test suite, exactly what CI runs (.ci/run calls this script).
+# It installs what the tests need first (libmujoco from the PyPI wheel), then checks
+# formatting and lints with warnings as errors, then runs every test of every crate
+# with every feature (the MuJoCo backend included).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if [ -x scripts/install-mujoco.sh ]; then
+    scripts/install-mujoco.sh
+fi
+
+echo "== cargo fmt --check"
+cargo fmt --all -- --check
+
+echo "== cargo clippy (warnings are errors)"
+cargo clippy --workspace --all-targets --all-features --locked -- -D warnings
+
+echo "== cargo test"
+cargo test --workspace --all-features --locked
