@@ -1,1 +1,29 @@
-//! See the crate description.
+//! PlaMo locomotion controller (paper section 4.2): the observation a policy sees,
+//! the policy contract, a learned policy loaded from ONNX, and the path-tracking
+//! metrics every run reports.
+//!
+//! Pure computation: no transport, no physics. The orchestrator feeds a
+//! [`HumanoidSnapshot`], the plan's next waypoints and the scene into an
+//! [`Observation`], asks a [`Policy`] for an [`Action`] (PD targets + optional bounded
+//! root wrench), and records a [`StepSample`] into a [`MetricsAccumulator`].
+#![warn(missing_docs)]
+
+mod error;
+mod math;
+mod metrics;
+mod observation;
+mod onnx_policy;
+mod policy;
+mod settings;
+
+pub use error::{ControllerError, Result};
+pub use metrics::{
+    MetricsAccumulator, MetricsSummary, PathRewardWeights, RewardTerms, StepSample, path_reward,
+};
+pub use observation::{
+    HumanoidSnapshot, NUM_WAYPOINTS, OBSERVATION_VERSION, Observation, ObservationLayout,
+    ObservationOffsets, WAYPOINT_SPACING, Waypoint,
+};
+pub use onnx_policy::{OnnxPolicy, PolicySidecar};
+pub use policy::{Action, Policy, RootWrench};
+pub use settings::{ControllerSettings, GRAVITY};
