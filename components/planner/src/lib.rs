@@ -1,1 +1,45 @@
-//! See the crate description.
+//! PlaMo's dynamic path planner (paper section 4.1).
+//!
+//! Stages, one module each: instruction parsing ([`parse_instructions`]), slope-aware
+//! A* on the terrain grid (`astar`, with connected-component labels in
+//! `connectivity` so unreachable targets fail fast), the refiner (`refine`: line of
+//! sight, smoothing, head height under ceilings), the minimum-time speed profile
+//! ([`solve_speed_qp`], checked against the exact [`forward_backward`] oracle), timing
+//! ([`Trajectory::sample_at`], [`Trajectory::next_waypoints`]) and re-planning around
+//! dynamic obstacles ([`predict_conflict`]). [`Planner`] ties them together and is
+//! stepped with the humanoid's state. All parameters live in [`PlannerSettings`].
+//!
+//! Pure computation: no transport, no clocks, deterministic.
+#![warn(missing_docs)]
+
+mod astar;
+mod connectivity;
+mod dynamic;
+mod error;
+mod grid;
+mod instructions;
+mod planner;
+mod refine;
+mod settings;
+mod speed_oracle;
+mod speed_qp;
+pub mod synthetic;
+mod timing;
+
+pub use astar::{AStar, GridPath, SearchLimits};
+pub use connectivity::{BLOCKED, Components};
+pub use dynamic::{Conflict, Prediction, predict, predict_conflict};
+pub use error::{PlanError, SpeedFailure, UnreachableReason};
+pub use grid::PlanGrid;
+pub use instructions::{Instruction, Locomotion, Source, VALID_VERBS, parse_instructions};
+pub use planner::{PlanStatus, Planner, PlannerInput, PlannerOutput, Progress, ReplanReason};
+pub use refine::PathPoint;
+pub use settings::PlannerSettings;
+pub use speed_oracle::{SpeedProblem, forward_backward, travel_time};
+pub use speed_qp::solve_speed_qp;
+pub use timing::{Trajectory, Waypoint};
+
+#[cfg(test)]
+pub(crate) mod test_scenes {
+    pub use crate::synthetic::*;
+}

@@ -1,0 +1,229 @@
+//! The planning grid: terrain samples (every `grid_stride`-th), wall clearance,
+//! headroom, and precomputed 8-connected edge costs.
+
+use plamo_scenes::Scene;
+
+use crate::PlannerSettings;
+
+/// Offsets of the 8 neighbours; the first four are the "forward" directions whose
+/// costs are stored per cell, the last four their opposites.
+pub(crate) const DIRS: [(isize, isize); 8] = [
+    (1, 0),
+    (0, 1),
+    (1, 1),
+    (-1, 1),
+    (-1, 0),
+    (0, -1),
+    (-1, -1),
+    (1, -1),
+];
+
+/// The 8-connected planning graph over the terrain.
+#[derive(Debug, Clone)]
+pub struct PlanGrid {
+    /// World XY of cell (0, 0) \[m\].
+    pub origin: [f64; 2],
+    /// Cell size \[m\].
+    pub resolution: f64,
+    /// Cells along X.
+    pub nx: usize,
+    /// Cells along Y.
+    pub ny: usize,
+    /// Terrain height per cell \[m\].
+    pub height: Vec<f64>,
+    /// Headroom (ceiling minus terrain) per cell, `f32::INFINITY` under open sky \[m\].
+    pub headroom: Vec<f32>,
+    /// Whether the cell is clear of walls by at least the character radius.
+    pub free: Vec<bool>,
+    /// Edge cost for the four forward directions `DIRS[0..4]`, `INFINITY` when the
+    /// edge is removed (wall, corner cut, infeasible slope) \[m\].
+    pub cost: [Vec<f32>; 4],
+}
+
+/// Cost of one edge: 3D length + height cost + terrain preference (paper 5.2).
+/// `None` when the slope is infeasible.
+pub(crate) fn edge_cost(s: &PlannerSettings, dxy: f64, dh: f64) -> Option<f64> {
+    let adh = dh.abs();
+    let slope = adh / dxy;
+    if slope > s.max_slope.tan() && adh > s.max_step_height {
+        return None;
+    }
+    let len = (dxy * dxy + dh * dh).sqrt();
+    let pref = if s.slope_preference_c == 0.0 {
+        0.0
+    } else {
+        dxy * ((s.slope_preference_c * slope).exp() - 1.0)
+    };
+    Some(len + s.height_cost * adh + pref)
+}
+
+impl PlanGrid {
+    /// Build the grid for a scene.
+    pub fn build(scene: &Scene, s: &PlannerSettings) -> Self {
+        let t = &scene.terrain;
+        let k = s.grid_stride;
+        let nx = (t.nx - 1) / k + 1;
+        let ny = (t.ny - 1) / k + 1;
+        let res = t.resolution * k as f64;
+        let n = nx * ny;
+        let mut height = vec![0.0; n];
+        for j in 0..ny {
+            for i in 0..nx {
+                height[j * nx + i] = t.heights[(j * k) * t.nx + i * k];
+            }
+        }
+        let origin = t.origin;
+        let pos = |i: usize, j: usize| [origin[0] + i as f64 * res, origin[1] + j as f64 * res];
+        // Cells covered by an axis-aligned box, clamped to the grid.
+        let cover = |lo: [f64; 2], hi: [f64; 2]| {
+            let i0 = ((lo[0] - origin[0]) / res).floor().max(0.0) as usize;
+            let j0 = ((lo[1] - origin[1]) / res).floor().max(0.0) as usize;
+            let i1 = (((hi[0] - origin[0]) / res).ceil().max(0.0) as usize).min(nx - 1);
+            let j1 = (((hi[1] - origin[1]) / res).ceil().max(0.0) as usize).min(ny - 1);
+            (i0, j0, i1, j1)
+        };
+        let r = s.character_radius;
+        let mut free = vec![true; n];
+        for w in &scene.walls {
+            let (lo, hi) = w.footprint.aabb();
+            let (i0, j0, i1, j1) = cover([lo[0] - r, lo[1] - r], [hi[0] + r, hi[1] + r]);
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let [x, y] = pos(i, j);
+                    if w.footprint.signed_distance(x, y) < r {
+                        free[j * nx + i] = false;
+                    }
+                }
+            }
+        }
+        let mut headroom = vec![f32::INFINITY; n];
+        for top in &scene.tops {
+            let (lo, hi) = top.footprint.aabb();
+            let (i0, j0, i1, j1) = cover(lo, hi);
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let [x, y] = pos(i, j);
+                    if top.footprint.contains(x, y) {
+                        let c = j * nx + i;
+                        let hr = (top.z_bottom - height[c]) as f32;
+                        headroom[c] = headroom[c].min(hr);
+                    }
+                }
+            }
+        }
+        let mut cost: [Vec<f32>; 4] = std::array::from_fn(|_| vec![f32::INFINITY; n]);
+        for (d, &(di, dj)) in DIRS[..4].iter().enumerate() {
+            let dxy = res * ((di * di + dj * dj) as f64).sqrt();
+            for j in 0..ny {
+                let j2 = j as isize + dj;
+                if j2 < 0 || j2 >= ny as isize {
+                    continue;
+                }
+                for i in 0..nx {
+                    let i2 = i as isize + di;
+                    if i2 < 0 || i2 >= nx as isize {
+                        continue;
+                    }
+                    let a = j * nx + i;
+                    let b = j2 as usize * nx + i2 as usize;
+                    if !free[a] || !free[b] {
+                        continue;
+                    }
+                    if di != 0 && dj != 0 {
+                        // No corner cutting: both orthogonal neighbours must be free.
+                        let c1 = j * nx + i2 as usize;
+                        let c2 = j2 as usize * nx + i;
+                        if !free[c1] || !free[c2] {
+                            continue;
+                        }
+                    }
+                    if let Some(w) = edge_cost(s, dxy, height[b] - height[a]) {
+                        cost[d][a] = w as f32;
+                    }
+                }
+            }
+        }
+        Self {
+            origin,
+            resolution: res,
+            nx,
+            ny,
+            height,
+            headroom,
+            free,
+            cost,
+        }
+    }
+
+    /// Number of cells.
+    pub fn len(&self) -> usize {
+        self.nx * self.ny
+    }
+
+    /// Whether the grid has no cells (never, for a valid scene).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// World XY of a cell index.
+    pub fn position(&self, c: usize) -> [f64; 2] {
+        [
+            self.origin[0] + (c % self.nx) as f64 * self.resolution,
+            self.origin[1] + (c / self.nx) as f64 * self.resolution,
+        ]
+    }
+
+    /// The cell nearest to (x, y), if on the grid.
+    pub fn cell_of(&self, x: f64, y: f64) -> Option<usize> {
+        let fi = ((x - self.origin[0]) / self.resolution).round();
+        let fj = ((y - self.origin[1]) / self.resolution).round();
+        (fi >= 0.0 && fj >= 0.0 && (fi as usize) < self.nx && (fj as usize) < self.ny)
+            .then(|| fj as usize * self.nx + fi as usize)
+    }
+
+    /// Whether a cell can be occupied with head height at least `min_head` \[m\]
+    /// (plus the head margin, already folded into `min_head` by callers).
+    #[inline]
+    pub fn passable(&self, c: usize, min_head: f32) -> bool {
+        self.free[c] && self.headroom[c] >= min_head
+    }
+
+    /// Cost of the edge from `a` in direction `d` (index into `DIRS`), and the
+    /// neighbour, or `None` when the edge is off-grid or removed.
+    #[inline]
+    pub fn edge(&self, a: usize, d: usize) -> Option<(usize, f32)> {
+        let (di, dj) = DIRS[d];
+        let i = (a % self.nx) as isize + di;
+        let j = (a / self.nx) as isize + dj;
+        if i < 0 || j < 0 || i >= self.nx as isize || j >= self.ny as isize {
+            return None;
+        }
+        let b = j as usize * self.nx + i as usize;
+        let w = if d < 4 {
+            self.cost[d][a]
+        } else {
+            self.cost[d - 4][b]
+        };
+        w.is_finite().then_some((b, w))
+    }
+
+    /// Like [`Self::edge`], and both ends (and, diagonally, both corner cells) are
+    /// passable at head height `min_head`.
+    #[inline]
+    pub fn edge_for(&self, a: usize, d: usize, min_head: f32) -> Option<(usize, f32)> {
+        let (b, w) = self.edge(a, d)?;
+        if self.headroom[b] < min_head {
+            return None;
+        }
+        if d == 2 || d == 3 || d == 6 || d == 7 {
+            let (ai, aj) = (a % self.nx, a / self.nx);
+            let (bi, bj) = (b % self.nx, b / self.nx);
+            if self.headroom[aj * self.nx + bi] < min_head
+                || self.headroom[bj * self.nx + ai] < min_head
+            {
+                return None;
+            }
+        }
+        Some((b, w))
+    }
+}

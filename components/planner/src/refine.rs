@@ -1,0 +1,299 @@
+//! Stage 3: the refiner. Line-of-sight shortcutting of the A* cells (never cheaper
+//! than the grid path's cost would allow), uniform resampling, clearance-preserving
+//! Laplacian smoothing, then per-point terrain, curvature, head height and speed caps.
+
+use plamo_scenes::Scene;
+use serde::{Deserialize, Serialize};
+
+use crate::astar::{GridPath, SearchLimits};
+use crate::grid::{PlanGrid, edge_cost};
+use crate::{Locomotion, PlannerSettings};
+
+/// One point of a refined, timed path.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct PathPoint {
+    /// World X \[m\].
+    pub x: f64,
+    /// World Y \[m\].
+    pub y: f64,
+    /// Terrain height under the point \[m\].
+    pub ground: f64,
+    /// Head height above the terrain \[m\].
+    pub head_height: f64,
+    /// Arc length from the path's start \[m\].
+    pub s: f64,
+    /// Unsigned curvature kappa \[1/m\].
+    pub curvature: f64,
+    /// Terrain slope along the path \[rad\].
+    pub slope: f64,
+    /// Speed cap from locomotion, head height and slope (no lateral limit) \[m/s\].
+    pub v_cap: f64,
+    /// Planned speed \[m/s\].
+    pub v: f64,
+    /// Planned time of passage, relative to the trajectory start \[s\].
+    pub t: f64,
+}
+
+impl PathPoint {
+    /// Absolute head height, the z the controller tracks \[m\].
+    pub fn head_z(&self) -> f64 {
+        self.ground + self.head_height
+    }
+}
+
+/// What the refiner needs to check a point.
+pub(crate) struct RefineCtx<'a> {
+    pub scene: &'a Scene,
+    pub grid: &'a PlanGrid,
+    pub settings: &'a PlannerSettings,
+    pub min_head: f32,
+    pub limits: &'a SearchLimits,
+}
+
+impl RefineCtx<'_> {
+    /// A point is usable when its nearest cell is passable (walls inflated by the
+    /// character radius, headroom) and outside blocked discs. Clearance holds to within
+    /// half a cell diagonal (0.07 m at 0.1 m cells).
+    fn point_ok(&self, x: f64, y: f64) -> bool {
+        let Some(c) = self.grid.cell_of(x, y) else {
+            return false;
+        };
+        self.grid.passable(c, self.min_head)
+            && self
+                .limits
+                .blocked_discs
+                .iter()
+                .all(|d| (x - d[0]).powi(2) + (y - d[1]).powi(2) > d[2] * d[2])
+    }
+
+    /// Cost of the straight segment a-b with the A* edge cost, or `None` if it leaves
+    /// the free space or crosses an infeasible slope.
+    fn segment_cost(&self, a: [f64; 2], b: [f64; 2]) -> Option<f64> {
+        let len = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        let step = 0.5 * self.grid.resolution;
+        let n = (len / step).ceil().max(1.0) as usize;
+        let dxy = len / n as f64;
+        let mut cost = 0.0;
+        let mut h_prev = self.scene.height_at(a[0], a[1]);
+        for k in 1..=n {
+            let f = k as f64 / n as f64;
+            let x = a[0] + (b[0] - a[0]) * f;
+            let y = a[1] + (b[1] - a[1]) * f;
+            if !self.point_ok(x, y) {
+                return None;
+            }
+            let h = self.scene.height_at(x, y);
+            cost += edge_cost(self.settings, dxy.max(1e-9), h - h_prev)?;
+            h_prev = h;
+        }
+        Some(cost)
+    }
+}
+
+/// Greedy line-of-sight shortcutting: from each anchor jump to the farthest later
+/// cell visible from it whose straight cost does not exceed the grid path's cost
+/// between them (so a shortcut never cuts over a hill the slope cost avoided).
+pub(crate) fn shortcut(ctx: &RefineCtx, pts: &[[f64; 2]], cost_to: &[f64]) -> Vec<[f64; 2]> {
+    let last = pts.len() - 1;
+    let mut out = vec![pts[0]];
+    let mut a = 0;
+    while a < last {
+        let mut best = a + 1;
+        let mut misses = 0;
+        for j in a + 2..=last {
+            let ok = ctx
+                .segment_cost(pts[a], pts[j])
+                .is_some_and(|c| c <= (cost_to[j] - cost_to[a]) * 1.02 + 1e-9);
+            if ok {
+                best = j;
+                misses = 0;
+            } else {
+                misses += 1;
+                if misses > 20 {
+                    break;
+                }
+            }
+        }
+        out.push(pts[best]);
+        a = best;
+    }
+    out
+}
+
+/// Points at uniform arc-length spacing (about `ds`) along a polyline, both ends kept.
+pub(crate) fn resample(poly: &[[f64; 2]], ds: f64) -> Vec<[f64; 2]> {
+    let mut cum = vec![0.0];
+    for w in poly.windows(2) {
+        let l = ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt();
+        cum.push(cum.last().unwrap() + l);
+    }
+    let total = *cum.last().unwrap();
+    if total <= 0.0 {
+        return vec![poly[0]];
+    }
+    let n = (total / ds).ceil().max(1.0) as usize;
+    let mut out = Vec::with_capacity(n + 1);
+    let mut seg = 0;
+    for k in 0..=n {
+        let s = total * k as f64 / n as f64;
+        while seg + 1 < cum.len() - 1 && cum[seg + 1] < s {
+            seg += 1;
+        }
+        let l = cum[seg + 1] - cum[seg];
+        let f = if l > 0.0 {
+            ((s - cum[seg]) / l).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let (p, q) = (poly[seg], poly[seg + 1]);
+        out.push([p[0] + (q[0] - p[0]) * f, p[1] + (q[1] - p[1]) * f]);
+    }
+    out
+}
+
+/// Laplacian smoothing; a move is kept only if the point stays usable and both its
+/// segments stay traversable. Ends are fixed.
+pub(crate) fn smooth(ctx: &RefineCtx, pts: &mut [[f64; 2]], iterations: usize) {
+    let n = pts.len();
+    if n < 3 {
+        return;
+    }
+    for _ in 0..iterations {
+        for i in 1..n - 1 {
+            let p = pts[i];
+            let m = [
+                0.5 * (pts[i - 1][0] + pts[i + 1][0]),
+                0.5 * (pts[i - 1][1] + pts[i + 1][1]),
+            ];
+            let q = [p[0] + 0.5 * (m[0] - p[0]), p[1] + 0.5 * (m[1] - p[1])];
+            if ctx.point_ok(q[0], q[1]) {
+                pts[i] = q;
+            }
+        }
+    }
+}
+
+/// Menger curvature of three points \[1/m\].
+fn menger(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    let ab = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+    let bc = ((c[0] - b[0]).powi(2) + (c[1] - b[1]).powi(2)).sqrt();
+    let ca = ((a[0] - c[0]).powi(2) + (a[1] - c[1]).powi(2)).sqrt();
+    let cross = ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs();
+    let d = ab * bc * ca;
+    if d <= 1e-12 { 0.0 } else { 2.0 * cross / d }
+}
+
+/// Head height allowed by ceilings near (x, y): the lowest top whose footprint is
+/// within the character radius, minus the margin \[m above terrain\].
+pub(crate) fn head_limit(scene: &Scene, s: &PlannerSettings, x: f64, y: f64, ground: f64) -> f64 {
+    scene
+        .tops
+        .iter()
+        .filter(|t| t.footprint.signed_distance(x, y) <= s.character_radius)
+        .map(|t| t.z_bottom - ground - s.head_margin)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Fill terrain, curvature, head height and speed caps for uniformly spaced points.
+pub(crate) fn annotate(
+    scene: &Scene,
+    s: &PlannerSettings,
+    form: Locomotion,
+    pts: &[[f64; 2]],
+) -> Vec<PathPoint> {
+    let n = pts.len();
+    let mut out: Vec<PathPoint> = Vec::with_capacity(n);
+    let mut arc = 0.0;
+    for (i, p) in pts.iter().enumerate() {
+        if i > 0 {
+            let q = pts[i - 1];
+            arc += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+        }
+        out.push(PathPoint {
+            x: p[0],
+            y: p[1],
+            ground: scene.height_at(p[0], p[1]),
+            s: arc,
+            ..Default::default()
+        });
+    }
+    let ds = if n > 1 {
+        arc / (n - 1) as f64
+    } else {
+        s.path_spacing
+    };
+    let w = ((0.5 * s.curvature_window / ds.max(1e-9)).round() as usize).max(1);
+    for i in 0..n {
+        if n >= 3 {
+            let a = i.saturating_sub(w);
+            let c = (i + w).min(n - 1);
+            out[i].curvature = if c > a + 1 {
+                let b = (a + c) / 2;
+                menger(pts[a], pts[b], pts[c])
+            } else {
+                0.0
+            };
+        }
+        let a = i.saturating_sub(1);
+        let c = (i + 1).min(n - 1);
+        let dsa = out[c].s - out[a].s;
+        out[i].slope = if dsa > 0.0 {
+            ((out[c].ground - out[a].ground) / dsa).abs().atan()
+        } else {
+            0.0
+        };
+    }
+    // Head height: the form's height, capped under ceilings, then limited in rate so
+    // the head goes down before a low top and comes back up after it.
+    let want = s.head_height(form);
+    for p in out.iter_mut() {
+        p.head_height = want.min(head_limit(scene, s, p.x, p.y, p.ground));
+    }
+    for i in 1..n {
+        let lim = out[i - 1].head_height + s.head_height_rate * (out[i].s - out[i - 1].s);
+        out[i].head_height = out[i].head_height.min(lim);
+    }
+    for i in (0..n.saturating_sub(1)).rev() {
+        let lim = out[i + 1].head_height + s.head_height_rate * (out[i + 1].s - out[i].s);
+        out[i].head_height = out[i].head_height.min(lim);
+    }
+    for p in out.iter_mut() {
+        let v = s.speed_cap_at_height(form, p.head_height);
+        p.v_cap = v / (1.0 + s.slope_speed_gain * p.slope.tan());
+    }
+    out
+}
+
+/// Refine an A* path into uniformly spaced, annotated points. `start` replaces the
+/// first cell centre when it is usable (the character's exact position).
+pub(crate) fn refine(
+    ctx: &RefineCtx,
+    form: Locomotion,
+    path: &GridPath,
+    start: Option<[f64; 2]>,
+) -> Vec<PathPoint> {
+    let mut pts: Vec<[f64; 2]> = path.cells.iter().map(|&c| ctx.grid.position(c)).collect();
+    if let Some(p) = start
+        && ctx.point_ok(p[0], p[1])
+    {
+        pts[0] = p;
+    }
+    let poly = if pts.len() > 2 {
+        shortcut(ctx, &pts, &path.cost_to)
+    } else {
+        pts
+    };
+    let ds = ctx.settings.path_spacing;
+    let mut dense = if poly.len() == 1 {
+        poly
+    } else {
+        resample(&poly, ds)
+    };
+    smooth(ctx, &mut dense, ctx.settings.smoothing_iterations);
+    let dense = if dense.len() > 1 {
+        resample(&dense, ds)
+    } else {
+        dense
+    };
+    annotate(ctx.scene, ctx.settings, form, &dense)
+}

@@ -1,0 +1,300 @@
+//! Every planner parameter in one place, with its paper symbol, unit and default.
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Locomotion, PlanError};
+
+/// Planner parameters (paper 4.1 and 5.3 "Speed control"). Each field documents its
+/// symbol, unit and default; [`PlannerSettings::validate`] checks them all.
+///
+/// Sign convention for longitudinal acceleration: `a_min` is the most negative
+/// acceleration allowed (a deceleration limit), so it is `<= 0`; the paper's
+/// a_min = -0.1 m/s^2 means "slow down by at most 0.1 m/s every second".
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PlannerSettings {
+    /// Character radius used as wall clearance by A* and the refiner \[m\]. Default 0.3.
+    pub character_radius: f64,
+    /// Margin between the head and any ceiling: head <= headroom - margin \[m\].
+    /// Also the margin A* adds to the crawl height. Default 0.1.
+    pub head_margin: f64,
+    /// Head height when crawling \[m\]. Default 0.4.
+    pub crawl_height: f64,
+    /// Head height when crouch-walking \[m\]. Default 0.8.
+    pub crouch_height: f64,
+    /// Head height standing (walk, run, sprint) \[m\]. Default 1.47.
+    pub stand_height: f64,
+    /// Top speed crawling \[m/s\]. Default 1.0.
+    pub crawl_speed: f64,
+    /// Top speed crouch-walking \[m/s\]. Default 2.0.
+    pub crouch_speed: f64,
+    /// Top speed walking \[m/s\]. Default 2.0.
+    pub walk_speed: f64,
+    /// Top speed running \[m/s\]. Default 4.0.
+    pub run_speed: f64,
+    /// Top speed sprinting \[m/s\]. Default 5.0.
+    pub sprint_speed: f64,
+    /// Longitudinal acceleration limit a_max \[m/s^2\], > 0. Paper: 0.5.
+    pub a_max: f64,
+    /// Longitudinal deceleration limit a_min \[m/s^2\], < 0 (see the type's doc).
+    /// Paper: -0.1.
+    pub a_min: f64,
+    /// Lateral acceleration limit a_lat: v^2 * kappa <= a_lat \[m/s^2\]. Default 1.0.
+    pub a_lat: f64,
+    /// Terrain preference c: each edge's length is increased by
+    /// length * (e^(c * slope) - 1), slope = |dh| / dxy (paper 5.2) \[1\]. 0 disables it.
+    /// Default 1.0.
+    pub slope_preference_c: f64,
+    /// Height-difference cost: metres of extra cost per metre climbed or descended
+    /// \[1\]. Default 0.5.
+    pub height_cost: f64,
+    /// Steepest traversable slope \[rad\]; steeper edges are removed unless their
+    /// height step is at most `max_step_height`. Default 0.7 (40 degrees).
+    pub max_slope: f64,
+    /// A height step that is always traversable (stairs) \[m\]. Default 0.25.
+    pub max_step_height: f64,
+    /// Speed reduction on slopes: v_cap = v / (1 + k * tan(slope along path)) \[1\].
+    /// Default 1.0.
+    pub slope_speed_gain: f64,
+    /// Planning grid = every `grid_stride`-th terrain sample (1 = the terrain's own
+    /// resolution, 0.1 m by default) \[samples\]. Default 1.
+    pub grid_stride: usize,
+    /// Spacing of the refined path \[m\]. Default 0.1.
+    pub path_spacing: f64,
+    /// Smoothing passes of the refiner (Laplacian, clearance-preserving). Default 40.
+    pub smoothing_iterations: usize,
+    /// Arc length over which curvature is measured \[m\]. Default 0.3.
+    pub curvature_window: f64,
+    /// Largest rate of head-height change along the path \[m per m\]. Default 0.5.
+    pub head_height_rate: f64,
+    /// Dynamic obstacles: look-ahead for predicted collisions \[s\]. Paper: 1.5.
+    pub collision_horizon: f64,
+    /// Time step of the collision sweep \[s\]. Default 0.1.
+    pub collision_dt: f64,
+    /// Extra distance kept from dynamic obstacles \[m\]. Default 0.2.
+    pub obstacle_margin: f64,
+    /// Local re-plan: distance past the conflict where the detour rejoins the old
+    /// path \[m\]. Default 2.0.
+    pub rejoin_distance: f64,
+    /// Local re-plan: margin of the A* window around start, rejoin and obstacle \[m\].
+    /// Default 3.0.
+    pub replan_window_margin: f64,
+    /// Local re-plan: arc length of old path re-timed after the rejoin point \[m\].
+    /// Default 20.
+    pub replan_speed_horizon: f64,
+    /// Full re-plan when the head is farther than this from the path \[m\]. Default 1.0.
+    pub drift_distance: f64,
+    /// Full re-plan when the head lags the timed plan by more than this \[m\]. Default 2.0.
+    pub lag_distance: f64,
+    /// Number of waypoints handed to the controller. Paper: 10.
+    pub waypoint_count: usize,
+    /// Time between waypoints \[s\]. Paper: 0.5.
+    pub waypoint_dt: f64,
+}
+
+impl Default for PlannerSettings {
+    fn default() -> Self {
+        Self {
+            character_radius: 0.3,
+            head_margin: 0.1,
+            crawl_height: 0.4,
+            crouch_height: 0.8,
+            stand_height: 1.47,
+            crawl_speed: 1.0,
+            crouch_speed: 2.0,
+            walk_speed: 2.0,
+            run_speed: 4.0,
+            sprint_speed: 5.0,
+            a_max: 0.5,
+            a_min: -0.1,
+            a_lat: 1.0,
+            slope_preference_c: 1.0,
+            height_cost: 0.5,
+            max_slope: 0.7,
+            max_step_height: 0.25,
+            slope_speed_gain: 1.0,
+            grid_stride: 1,
+            path_spacing: 0.1,
+            smoothing_iterations: 40,
+            curvature_window: 0.3,
+            head_height_rate: 0.5,
+            collision_horizon: 1.5,
+            collision_dt: 0.1,
+            obstacle_margin: 0.2,
+            rejoin_distance: 2.0,
+            replan_window_margin: 3.0,
+            replan_speed_horizon: 20.0,
+            drift_distance: 1.0,
+            lag_distance: 2.0,
+            waypoint_count: 10,
+            waypoint_dt: 0.5,
+        }
+    }
+}
+
+impl PlannerSettings {
+    /// Check every field; the error names the field and what is allowed.
+    pub fn validate(&self) -> Result<(), PlanError> {
+        let positive = [
+            ("character_radius", self.character_radius),
+            ("head_margin", self.head_margin),
+            ("crawl_height", self.crawl_height),
+            ("crouch_height", self.crouch_height),
+            ("stand_height", self.stand_height),
+            ("crawl_speed", self.crawl_speed),
+            ("crouch_speed", self.crouch_speed),
+            ("walk_speed", self.walk_speed),
+            ("run_speed", self.run_speed),
+            ("sprint_speed", self.sprint_speed),
+            ("a_max", self.a_max),
+            ("a_lat", self.a_lat),
+            ("max_slope", self.max_slope),
+            ("path_spacing", self.path_spacing),
+            ("curvature_window", self.curvature_window),
+            ("head_height_rate", self.head_height_rate),
+            ("collision_horizon", self.collision_horizon),
+            ("collision_dt", self.collision_dt),
+            ("rejoin_distance", self.rejoin_distance),
+            ("replan_window_margin", self.replan_window_margin),
+            ("replan_speed_horizon", self.replan_speed_horizon),
+            ("drift_distance", self.drift_distance),
+            ("lag_distance", self.lag_distance),
+            ("waypoint_dt", self.waypoint_dt),
+        ];
+        for (field, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(PlanError::InvalidSettings {
+                    field,
+                    reason: format!("must be finite and > 0, got {v}"),
+                });
+            }
+        }
+        let non_negative = [
+            ("slope_preference_c", self.slope_preference_c),
+            ("height_cost", self.height_cost),
+            ("max_step_height", self.max_step_height),
+            ("slope_speed_gain", self.slope_speed_gain),
+            ("obstacle_margin", self.obstacle_margin),
+        ];
+        for (field, v) in non_negative {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(PlanError::InvalidSettings {
+                    field,
+                    reason: format!("must be finite and >= 0, got {v}"),
+                });
+            }
+        }
+        if !(self.a_min.is_finite() && self.a_min < 0.0) {
+            return Err(PlanError::InvalidSettings {
+                field: "a_min",
+                reason: format!(
+                    "is a deceleration limit and must be finite and < 0 (paper: -0.1), got {}",
+                    self.a_min
+                ),
+            });
+        }
+        if self.max_slope >= std::f64::consts::FRAC_PI_2 {
+            return Err(PlanError::InvalidSettings {
+                field: "max_slope",
+                reason: format!("must be below pi/2 rad, got {}", self.max_slope),
+            });
+        }
+        if !(self.crawl_height < self.crouch_height && self.crouch_height < self.stand_height) {
+            return Err(PlanError::InvalidSettings {
+                field: "crouch_height",
+                reason: "head heights must satisfy crawl < crouch < stand".into(),
+            });
+        }
+        if self.grid_stride == 0 {
+            return Err(PlanError::InvalidSettings {
+                field: "grid_stride",
+                reason: "must be >= 1".into(),
+            });
+        }
+        if self.waypoint_count == 0 {
+            return Err(PlanError::InvalidSettings {
+                field: "waypoint_count",
+                reason: "must be >= 1".into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Head height requested by a locomotion form \[m\].
+    pub fn head_height(&self, form: Locomotion) -> f64 {
+        match form {
+            Locomotion::Crawl => self.crawl_height,
+            Locomotion::CrouchWalk => self.crouch_height,
+            Locomotion::Walk | Locomotion::Run | Locomotion::Sprint => self.stand_height,
+        }
+    }
+
+    /// Top speed of a locomotion form \[m/s\].
+    pub fn top_speed(&self, form: Locomotion) -> f64 {
+        match form {
+            Locomotion::Crawl => self.crawl_speed,
+            Locomotion::CrouchWalk => self.crouch_speed,
+            Locomotion::Walk => self.walk_speed,
+            Locomotion::Run => self.run_speed,
+            Locomotion::Sprint => self.sprint_speed,
+        }
+    }
+
+    /// The paper's coupling v_max(z): the fastest speed at head height `z` for a form
+    /// \[m/s\]. Piecewise linear through (crawl height, crawl speed), (crouch height,
+    /// crouch speed), (stand height, the form's top speed), never above the form's top
+    /// speed; below the crawl height the crawl speed holds.
+    pub fn speed_cap_at_height(&self, form: Locomotion, z: f64) -> f64 {
+        let top = self.top_speed(form);
+        let pts = [
+            (self.crawl_height, self.crawl_speed),
+            (self.crouch_height, self.crouch_speed),
+            (self.stand_height, top.max(self.crouch_speed)),
+        ];
+        let v = if z <= pts[0].0 {
+            pts[0].1
+        } else if z >= pts[2].0 {
+            pts[2].1
+        } else {
+            let k = if z <= pts[1].0 { 0 } else { 1 };
+            let (z0, v0) = pts[k];
+            let (z1, v1) = pts[k + 1];
+            v0 + (v1 - v0) * (z - z0) / (z1 - z0)
+        };
+        v.min(top)
+    }
+
+    /// Lowest head height a form may drop to under a ceiling \[m\]: every form may
+    /// go down to crawling (the refiner lowers the head before low tops).
+    pub fn lowest_head_height(&self, _form: Locomotion) -> f64 {
+        self.crawl_height
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_validate_and_bad_values_name_the_field() {
+        PlannerSettings::default().validate().unwrap();
+        let s = PlannerSettings {
+            a_min: 0.1,
+            ..Default::default()
+        };
+        match s.validate() {
+            Err(PlanError::InvalidSettings { field, .. }) => assert_eq!(field, "a_min"),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn speed_is_capped_by_head_height() {
+        let s = PlannerSettings::default();
+        assert_eq!(s.speed_cap_at_height(Locomotion::Run, 1.47), 4.0);
+        assert_eq!(s.speed_cap_at_height(Locomotion::Run, 0.8), 2.0);
+        assert_eq!(s.speed_cap_at_height(Locomotion::Run, 0.4), 1.0);
+        assert!((s.speed_cap_at_height(Locomotion::Run, 0.6) - 1.5).abs() < 1e-12);
+        assert_eq!(s.speed_cap_at_height(Locomotion::Crawl, 1.47), 1.0);
+    }
+}

@@ -1,0 +1,189 @@
+//! Stage 5: from (x, y, z, v) along the path to waypoints at fixed time steps
+//! (paper appendix: the controller reads the next 5 s as 10 samples 0.5 s apart).
+//!
+//! Each segment is travelled at constant acceleration, so its duration is
+//! 2 ds / (v_i + v_{i+1}) and the arc length at time tau into it is
+//! v_i tau + a tau^2 / 2; positions are then interpolated linearly in arc length.
+
+use serde::{Deserialize, Serialize};
+
+use crate::PathPoint;
+
+/// A timed sample of the plan.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Waypoint {
+    /// Absolute simulated time \[s\].
+    pub t: f64,
+    /// Head position x, y and absolute head z \[m\].
+    pub position: [f64; 3],
+    /// Head height above the terrain \[m\].
+    pub head_height: f64,
+    /// Planned speed \[m/s\].
+    pub speed: f64,
+    /// Arc length along the path \[m\].
+    pub s: f64,
+}
+
+/// A refined path with speeds and passage times, starting at `start_time`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Trajectory {
+    /// Absolute time of the first point \[s\].
+    pub start_time: f64,
+    /// Points with `v` and `t` (relative to `start_time`) filled.
+    pub points: Vec<PathPoint>,
+}
+
+impl Trajectory {
+    /// Build from points with speeds set; fills the passage times.
+    pub fn new(start_time: f64, mut points: Vec<PathPoint>) -> Self {
+        let mut t = 0.0;
+        if let Some(p) = points.first_mut() {
+            p.t = 0.0;
+        }
+        for i in 1..points.len() {
+            let ds = points[i].s - points[i - 1].s;
+            let vs = points[i - 1].v + points[i].v;
+            t += if ds <= 0.0 {
+                0.0
+            } else if vs > 1e-9 {
+                2.0 * ds / vs
+            } else {
+                f64::INFINITY
+            };
+            points[i].t = t;
+        }
+        Self { start_time, points }
+    }
+
+    /// Total duration \[s\].
+    pub fn duration(&self) -> f64 {
+        self.points.last().map_or(0.0, |p| p.t)
+    }
+
+    /// Path length \[m\].
+    pub fn length(&self) -> f64 {
+        self.points.last().map_or(0.0, |p| p.s)
+    }
+
+    /// Time of arrival at the end, absolute \[s\].
+    pub fn end_time(&self) -> f64 {
+        self.start_time + self.duration()
+    }
+
+    fn waypoint(p: &PathPoint, t: f64) -> Waypoint {
+        Waypoint {
+            t,
+            position: [p.x, p.y, p.head_z()],
+            head_height: p.head_height,
+            speed: p.v,
+            s: p.s,
+        }
+    }
+
+    /// The plan at absolute time `t`: before the start the first point, after the
+    /// end the last point at rest.
+    pub fn sample_at(&self, t: f64) -> Waypoint {
+        let Some(first) = self.points.first() else {
+            return Waypoint {
+                t,
+                ..Default::default()
+            };
+        };
+        let tr = t - self.start_time;
+        if tr <= 0.0 {
+            return Self::waypoint(first, t);
+        }
+        let last = self.points.last().unwrap();
+        if tr >= last.t {
+            let mut w = Self::waypoint(last, t);
+            w.speed = 0.0;
+            return w;
+        }
+        // First point with p.t > tr; the segment is (i - 1, i).
+        let i = self.points.partition_point(|p| p.t <= tr).max(1);
+        let (a, b) = (&self.points[i - 1], &self.points[i]);
+        let ds = b.s - a.s;
+        let tau = tr - a.t;
+        let acc = if ds > 0.0 {
+            (b.v * b.v - a.v * a.v) / (2.0 * ds)
+        } else {
+            0.0
+        };
+        let s_in = (a.v * tau + 0.5 * acc * tau * tau).clamp(0.0, ds);
+        let f = if ds > 0.0 { s_in / ds } else { 0.0 };
+        let lerp = |u: f64, v: f64| u + (v - u) * f;
+        let ground = lerp(a.ground, b.ground);
+        let head = lerp(a.head_height, b.head_height);
+        Waypoint {
+            t,
+            position: [lerp(a.x, b.x), lerp(a.y, b.y), ground + head],
+            head_height: head,
+            speed: (a.v + acc * tau).max(0.0),
+            s: a.s + s_in,
+        }
+    }
+
+    /// `n` waypoints at t + dt, t + 2 dt, ..., t + n dt (paper: n = 10, dt = 0.5 s).
+    pub fn next_waypoints(&self, t: f64, n: usize, dt: f64) -> Vec<Waypoint> {
+        (1..=n).map(|k| self.sample_at(t + k as f64 * dt)).collect()
+    }
+
+    /// Index of the path point nearest to (x, y) and its distance \[m\].
+    pub fn closest_point(&self, x: f64, y: f64) -> Option<(usize, f64)> {
+        self.points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (i, (p.x - x).powi(2) + (p.y - y).powi(2)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, d)| (i, d.sqrt()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn straight(v: &[f64]) -> Trajectory {
+        let pts = v
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| PathPoint {
+                x: i as f64,
+                s: i as f64,
+                head_height: 1.47,
+                v,
+                ..Default::default()
+            })
+            .collect();
+        Trajectory::new(10.0, pts)
+    }
+
+    #[test]
+    fn constant_speed_samples_are_evenly_spaced() {
+        let tr = straight(&[2.0; 11]);
+        assert!((tr.duration() - 5.0).abs() < 1e-12);
+        let w = tr.next_waypoints(10.0, 10, 0.5);
+        assert_eq!(w.len(), 10);
+        for (k, wp) in w.iter().enumerate() {
+            assert!((wp.position[0] - (k as f64 + 1.0)).abs() < 1e-9);
+            assert!((wp.position[2] - 1.47).abs() < 1e-12);
+        }
+        // Past the end: hold the last point at rest.
+        let end = tr.sample_at(100.0);
+        assert_eq!(end.position[0], 10.0);
+        assert_eq!(end.speed, 0.0);
+    }
+
+    #[test]
+    fn accelerating_from_rest_follows_s_equals_half_a_t_squared() {
+        // b = 2 a s with a = 0.5: v_i = sqrt(i).
+        let v: Vec<f64> = (0..21).map(|i| (i as f64).sqrt()).collect();
+        let tr = straight(&v);
+        for k in 1..8 {
+            let t = k as f64 * 0.5;
+            let w = tr.sample_at(10.0 + t);
+            assert!((w.s - 0.25 * t * t).abs() < 1e-9, "t {t}: s {}", w.s);
+            assert!((w.speed - 0.5 * t).abs() < 1e-9);
+        }
+    }
+}

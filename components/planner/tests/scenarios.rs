@@ -1,0 +1,296 @@
+//! Done-when scenarios of the planner, on scenes built in code.
+
+use plamo_interfaces::Tick;
+use plamo_planner::synthetic::{ball_scene, flat_scene, pyramid_scene, slalom_scene};
+use plamo_planner::{
+    PlanError, PlanStatus, Planner, PlannerInput, PlannerSettings, Prediction, ReplanReason,
+    Trajectory, UnreachableReason, predict_conflict,
+};
+use plamo_scenes::{Footprint, Scene, Wall};
+
+fn max_ground(t: &Trajectory) -> f64 {
+    t.points.iter().map(|p| p.ground).fold(f64::MIN, f64::max)
+}
+
+#[test]
+fn pyramid_large_c_detours_and_c_zero_goes_over() {
+    let scene = pyramid_scene(2.0);
+    let over = Planner::new(
+        scene.clone(),
+        "walk from the west to the east",
+        [6.0, 15.0],
+        PlannerSettings {
+            slope_preference_c: 0.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let around = Planner::new(
+        scene,
+        "walk from the west to the east",
+        [6.0, 15.0],
+        PlannerSettings {
+            slope_preference_c: 10.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let (o, a) = (&over.route()[0], &around.route()[0]);
+    assert!(
+        max_ground(o) > 1.5,
+        "c = 0 should climb: max ground {}",
+        max_ground(o)
+    );
+    assert!(
+        max_ground(a) < 0.3,
+        "large c should detour: max ground {}",
+        max_ground(a)
+    );
+    assert!(a.length() > o.length() + 2.0);
+}
+
+#[test]
+fn slalom_slows_before_each_turn_and_respects_the_lateral_limit() {
+    let s = PlannerSettings::default();
+    let p = Planner::new(
+        slalom_scene(),
+        "run from the start to the finish",
+        [2.0, 5.0],
+        s.clone(),
+    )
+    .unwrap();
+    let t = &p.route()[0];
+    for q in &t.points {
+        assert!(
+            q.v * q.v * q.curvature <= s.a_lat * 1.001 + 1e-6,
+            "lateral {} at s {}",
+            q.v * q.v * q.curvature,
+            q.s
+        );
+        assert!(q.v <= s.run_speed + 1e-9);
+    }
+    // Each wall passage is a turn: the path crosses x = 8, 16, 24, 32. Find the
+    // curvature peak near each and check the speed there is below the speed a few
+    // metres earlier and within the lateral cap.
+    for x_wall in [8.0, 16.0, 24.0, 32.0] {
+        let near: Vec<_> = t
+            .points
+            .iter()
+            .filter(|q| (q.x - x_wall).abs() < 3.0)
+            .collect();
+        let apex = near
+            .iter()
+            .max_by(|a, b| a.curvature.total_cmp(&b.curvature))
+            .unwrap();
+        assert!(
+            apex.curvature > 0.2,
+            "a turn at x {x_wall}: kappa {}",
+            apex.curvature
+        );
+        let before: f64 = t
+            .points
+            .iter()
+            .filter(|q| q.s < apex.s && q.s > apex.s - 6.0)
+            .map(|q| q.v)
+            .fold(0.0, f64::max);
+        assert!(
+            before > apex.v + 0.02,
+            "slows before the turn at x {x_wall}: before {before} apex {}",
+            apex.v
+        );
+    }
+}
+
+fn assert_fits_under_ceilings(scene: &Scene, t: &Trajectory, margin: f64) {
+    for q in &t.points {
+        if let Some(c) = scene.ceiling_at(q.x, q.y) {
+            assert!(
+                q.head_z() <= c - margin + 1e-9,
+                "head {} under ceiling {} at ({}, {})",
+                q.head_z(),
+                c,
+                q.x,
+                q.y
+            );
+        }
+    }
+    // Between points too (the controller interpolates).
+    for k in 0..2000 {
+        let w = t.sample_at(t.start_time + t.duration() * k as f64 / 2000.0);
+        if let Some(c) = scene.ceiling_at(w.position[0], w.position[1]) {
+            assert!(w.position[2] <= c - margin + 1e-6);
+        }
+    }
+}
+
+#[test]
+fn plans_fit_under_every_ceiling() {
+    let scene = flat_scene();
+    let s = PlannerSettings::default();
+    let p = Planner::new(
+        scene.clone(),
+        "Run from the tree to the car, then crawl to the bench then walk to the swing then sprint to the tree",
+        [3.0, 3.0],
+        s.clone(),
+    )
+    .unwrap();
+    assert_eq!(p.route().len(), 4);
+    let mut lowered = false;
+    for t in p.route() {
+        assert_fits_under_ceilings(&scene, t, s.head_margin);
+        lowered |= t
+            .points
+            .iter()
+            .any(|q| q.head_height < 0.85 && q.head_height > 0.75);
+    }
+    assert!(lowered, "the route crosses the 0.9 m roof crouched");
+}
+
+#[test]
+fn unreachable_target_fails_fast_naming_the_instruction() {
+    let mut scene = flat_scene();
+    // Box in the bench.
+    for (c, h) in [
+        ([25.0, 4.5], [1.5, 0.2]),
+        ([25.0, 1.5], [1.5, 0.2]),
+        ([23.5, 3.0], [0.2, 1.5]),
+        ([26.5, 3.0], [0.2, 1.5]),
+    ] {
+        scene.walls.push(Wall {
+            name: "cage".into(),
+            footprint: Footprint::axis_aligned(c, h),
+            z_min: -1.0,
+            z_max: 2.0,
+        });
+    }
+    let err = Planner::new(
+        scene,
+        "walk to the car then run to the bench",
+        [3.0, 3.0],
+        PlannerSettings::default(),
+    )
+    .unwrap_err();
+    match &err {
+        PlanError::Unreachable {
+            index,
+            target,
+            reason,
+            ..
+        } => {
+            assert_eq!(*index, 1);
+            assert_eq!(target, "bench");
+            assert_eq!(*reason, UnreachableReason::Disconnected);
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(err.to_string().contains("instruction 1"));
+}
+
+#[test]
+fn dynamic_replan_avoids_a_ball_crossing_the_path() {
+    // A ball rolls across the corridor (along +Y, 2 m/s, at y = 5 when t = 2.5 + 5k s).
+    // Put its line where the runner's plan is at t = 7.5 s, so they would meet.
+    let s = PlannerSettings::default();
+    let probe = Planner::new(
+        ball_scene(100.0),
+        "run from the a to the b",
+        [2.0, 5.0],
+        s.clone(),
+    )
+    .unwrap();
+    let x_meet = probe.route()[0].sample_at(7.5).position[0];
+    let scene = ball_scene(x_meet);
+    let plan = probe.route()[0].clone();
+    let mut p = Planner::new(
+        scene.clone(),
+        "run from the a to the b",
+        [2.0, 5.0],
+        s.clone(),
+    )
+    .unwrap();
+    assert!(
+        (0..300).any(
+            |k| predict_conflict(&plan, &scene, &s, k as f64 / 30.0, Prediction::Rules).is_some()
+        ),
+        "the unmodified plan runs into the ball"
+    );
+    let mut replanned = 0;
+    let mut min_gap = f64::INFINITY;
+    let mut tick = 0u64;
+    while tick < 120 * 12 {
+        let now = tick as f64 / 120.0;
+        // The humanoid follows the current plan exactly.
+        let w = p
+            .current()
+            .map_or(plan.sample_at(now), |c| c.sample_at(now));
+        let input = PlannerInput {
+            head: w.position,
+            root: [w.position[0], w.position[1], 1.0],
+            velocity: [w.speed, 0.0, 0.0],
+            obstacles: vec![],
+        };
+        let out = p.plan_step(Tick(tick), &input).unwrap();
+        assert!(
+            !matches!(out.status, PlanStatus::Infeasible { .. }),
+            "{:?}",
+            out.status
+        );
+        if let Some(ReplanReason::Obstacle(_)) = out.replanned {
+            replanned += 1;
+            let tr = p.current().unwrap();
+            assert!(
+                predict_conflict(tr, &scene, &s, now, Prediction::Rules).is_none(),
+                "the new plan is clear of the ball at t = {now}"
+            );
+        }
+        let b = scene.dynamic[0].motion.state_at(now).position;
+        min_gap = min_gap.min((b[0] - w.position[0]).hypot(b[1] - w.position[1]));
+        tick += 4;
+    }
+    assert!(replanned >= 1, "re-planned around the ball");
+    // Ball radius 0.3 + character radius 0.3.
+    assert!(min_gap > 0.6, "closest approach {min_gap} m");
+}
+
+#[test]
+fn stepping_reaches_every_target_in_order() {
+    let scene = flat_scene();
+    let mut p = Planner::new(
+        scene,
+        "walk to the bench then crawl to the car",
+        [3.0, 3.0],
+        PlannerSettings::default(),
+    )
+    .unwrap();
+    let mut tick = 0u64;
+    let mut reached = vec![];
+    let mut last_status = PlanStatus::Following;
+    while tick < 120 * 400 {
+        let now = tick as f64 / 120.0;
+        let w = match p.current() {
+            Some(c) => c.sample_at(now),
+            None => p.route()[0].sample_at(now),
+        };
+        let out = p
+            .plan_step(
+                Tick(tick),
+                &PlannerInput {
+                    head: w.position,
+                    velocity: [w.speed, 0.0, 0.0],
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+        assert_eq!(out.waypoints.len(), 10);
+        if out.progress.reached {
+            reached.push(out.progress.index);
+        }
+        last_status = out.status.clone();
+        if out.status == PlanStatus::Finished {
+            break;
+        }
+        tick += 4;
+    }
+    assert_eq!(last_status, PlanStatus::Finished);
+    assert_eq!(reached, vec![1, 2]);
+}
