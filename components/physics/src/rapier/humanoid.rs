@@ -1,0 +1,277 @@
+//! The humanoid as a rapier reduced-coordinate multibody, built from
+//! [`crate::humanoid::BODIES`].
+//!
+//! Every hinge is its own link (rapier multibody joints with two free angular axes
+//! are unimplemented, and a three-axis joint integrates a rotation vector, not
+//! angles): a body with k hinges becomes k-1 massless intermediate links (tiny mass,
+//! no collider) followed by the body's own link, so child = parent * offset * R1 *
+//! R2 * R3 exactly as in MuJoCo. A body without hinges (the hands) is a fixed link.
+//!
+//! PD goes through rapier's implicit joint springs: stiffness `kp` with the rest
+//! position at the target, damping `kd + JOINT_DAMPING` on the DoF, armature on every
+//! hinge. The torque limit is applied to the spring term by moving its rest position
+//! to at most `max_torque / kp` from the current angle, refreshed every step.
+
+use rapier3d::prelude::*;
+
+use super::world::{HUMANOID_GROUP, SCENE_GROUP};
+use crate::humanoid::{ARMATURE, BODIES, HEAD, HEAD_OFFSET, JOINT_DAMPING, JOINTS, Shape};
+use crate::{HumanoidPose, HumanoidState, NUM_BODIES, NUM_JOINTS, RootWrench, math};
+
+/// Mass of an intermediate hinge link \[kg\] and its principal inertia \[kg m^2\]:
+/// small enough not to matter, non-zero so no rigid body is massless.
+const LINK_MASS: f32 = 1e-3;
+const LINK_INERTIA: f32 = 1e-6;
+
+/// Handles of one humanoid in the world.
+pub(crate) struct RapierHumanoid {
+    /// Rigid body of each body (its last link), [`crate::BODY_NAMES`] order.
+    pub bodies: [RigidBodyHandle; NUM_BODIES],
+    /// Every rigid body including intermediate links, in insertion order.
+    pub all_bodies: Vec<RigidBodyHandle>,
+    /// Rigid body of each joint's link.
+    joint_bodies: [RigidBodyHandle; NUM_JOINTS],
+    /// Multibody link id and DoF index of each joint.
+    joint_links: [(usize, usize); NUM_JOINTS],
+    /// Collider -> body index.
+    pub colliders: Vec<(ColliderHandle, usize)>,
+    /// Current PD targets \[rad\].
+    pub targets: [f64; NUM_JOINTS],
+    /// Current root wrench.
+    pub wrench: RootWrench,
+}
+
+fn v3(p: [f64; 3]) -> Vector {
+    Vector::new(p[0] as f32, p[1] as f32, p[2] as f32)
+}
+
+fn shape_collider(shape: &Shape, friction: f64) -> ColliderBuilder {
+    let b = match *shape {
+        Shape::Capsule { from, to, radius } => {
+            ColliderBuilder::capsule_from_endpoints(v3(from), v3(to), radius as f32)
+        }
+        Shape::Sphere { center, radius } => {
+            ColliderBuilder::ball(radius as f32).translation(v3(center))
+        }
+        Shape::Box {
+            center,
+            half_extents: h,
+        } => ColliderBuilder::cuboid(h[0] as f32, h[1] as f32, h[2] as f32).translation(v3(center)),
+    };
+    b.density(crate::humanoid::DENSITY as f32)
+        .friction(friction as f32)
+        .collision_groups(InteractionGroups::new(
+            HUMANOID_GROUP,
+            SCENE_GROUP,
+            InteractionTestMode::And,
+        ))
+}
+
+fn hinge(axis: crate::humanoid::Axis, offset: [f64; 3], range: [f64; 2]) -> GenericJoint {
+    let (free, jaxis) = match axis {
+        crate::humanoid::Axis::X => (JointAxesMask::ANG_X, JointAxis::AngX),
+        crate::humanoid::Axis::Y => (JointAxesMask::ANG_Y, JointAxis::AngY),
+        crate::humanoid::Axis::Z => (JointAxesMask::ANG_Z, JointAxis::AngZ),
+    };
+    GenericJointBuilder::new(JointAxesMask::LOCKED_FIXED_AXES & !free)
+        .local_frame1(Pose::from_translation(v3(offset)))
+        .local_frame2(Pose::IDENTITY)
+        .limits(jaxis, [range[0] as f32, range[1] as f32])
+        .contacts_enabled(false)
+        .build()
+}
+
+impl RapierHumanoid {
+    /// Build the humanoid at `pose` (at rest, targets = pose angles).
+    pub fn build(world: &mut PhysicsWorld, pose: &HumanoidPose, friction: f64) -> RapierHumanoid {
+        let q = pose.root_quat();
+        let root_pose = Pose::from_parts(
+            v3(pose.root_position),
+            Rotation::from_xyzw(q[1] as f32, q[2] as f32, q[3] as f32, q[0] as f32),
+        );
+        let mut bodies = [RigidBodyHandle::invalid(); NUM_BODIES];
+        let mut joint_bodies = [RigidBodyHandle::invalid(); NUM_JOINTS];
+        let mut all_bodies = Vec::new();
+        let mut colliders = Vec::new();
+        for (bi, desc) in BODIES.iter().enumerate() {
+            let mut parent = desc.parent.map(|p| bodies[p]);
+            let mut offset = desc.offset;
+            let n = desc.joints.len();
+            // Intermediate links for all hinges but the last.
+            for (k, &ji) in desc.joints.iter().enumerate() {
+                let last = k + 1 == n;
+                let mut rb = RigidBodyBuilder::dynamic().pose(root_pose).can_sleep(false);
+                if !last {
+                    rb = rb.additional_mass_properties(MassProperties::new(
+                        Vector::ZERO,
+                        LINK_MASS,
+                        Vector::splat(LINK_INERTIA),
+                    ));
+                }
+                let h = world.insert_body(rb);
+                all_bodies.push(h);
+                let jd = &JOINTS[ji];
+                world.insert_multibody_joint(
+                    parent.expect("only the pelvis has no parent"),
+                    h,
+                    hinge(jd.axis, offset, jd.range),
+                );
+                joint_bodies[ji] = h;
+                parent = Some(h);
+                offset = [0.0; 3];
+            }
+            let h = if n > 0 {
+                *all_bodies.last().expect("just inserted")
+            } else {
+                let h =
+                    world.insert_body(RigidBodyBuilder::dynamic().pose(root_pose).can_sleep(false));
+                all_bodies.push(h);
+                if let Some(p) = parent {
+                    let fixed = GenericJointBuilder::new(JointAxesMask::LOCKED_FIXED_AXES)
+                        .local_frame1(Pose::from_translation(v3(offset)))
+                        .contacts_enabled(false)
+                        .build();
+                    world.insert_multibody_joint(p, h, fixed);
+                }
+                h
+            };
+            bodies[bi] = h;
+            for s in desc.shapes {
+                let c = world.insert_collider(shape_collider(s, friction), Some(h));
+                colliders.push((c, bi));
+            }
+        }
+        let mut joint_links = [(0, 0); NUM_JOINTS];
+        let mb_index = world
+            .multibody_joints
+            .rigid_body_link(bodies[0])
+            .expect("root is a link")
+            .multibody;
+        for ji in 0..NUM_JOINTS {
+            let link = world
+                .multibody_joints
+                .rigid_body_link(joint_bodies[ji])
+                .expect("joint body is a link");
+            let mb = world
+                .multibody_joints
+                .get_multibody(mb_index)
+                .expect("multibody");
+            let l = mb.link(link.id).expect("link");
+            joint_links[ji] = (link.id, l.assembly_id());
+        }
+        let joints = pose.clamped_joints();
+        let mb = world
+            .multibody_joints
+            .get_multibody_mut(mb_index)
+            .expect("multibody");
+        let mut disp = vec![0.0f32; mb.ndofs()];
+        for ji in 0..NUM_JOINTS {
+            let (_, dof) = joint_links[ji];
+            disp[dof] = joints[ji] as f32;
+            mb.damping_mut()[dof] = (JOINTS[ji].kd + JOINT_DAMPING) as f32;
+            mb.armature_mut()[dof] = ARMATURE as f32;
+        }
+        mb.apply_displacements(&disp);
+        mb.forward_kinematics(&world.bodies, true);
+        mb.update_rigid_bodies(&mut world.bodies, true);
+        let mut h = RapierHumanoid {
+            bodies,
+            all_bodies,
+            joint_bodies,
+            joint_links,
+            colliders,
+            targets: joints,
+            wrench: RootWrench::default(),
+        };
+        h.apply_controls(world);
+        h
+    }
+
+    fn multibody_index(&self, world: &PhysicsWorld) -> MultibodyIndex {
+        world
+            .multibody_joints
+            .rigid_body_link(self.bodies[0])
+            .expect("root is a link")
+            .multibody
+    }
+
+    /// Remove every body, collider and joint of this humanoid.
+    pub fn remove(&self, world: &mut PhysicsWorld) {
+        for &h in self.all_bodies.iter().rev() {
+            world.remove_body(h);
+        }
+        world.remove_body(self.bodies[0]);
+    }
+
+    /// Refresh spring rest positions (torque-limited PD) and the root wrench.
+    pub fn apply_controls(&mut self, world: &mut PhysicsWorld) {
+        let idx = self.multibody_index(world);
+        let mb = world
+            .multibody_joints
+            .get_multibody_mut(idx)
+            .expect("multibody");
+        for ji in 0..NUM_JOINTS {
+            let (link_id, _) = self.joint_links[ji];
+            let jd = &JOINTS[ji];
+            let axis = 3 + jd.axis.index();
+            let link = mb.link_mut(link_id).expect("link");
+            let q = link.joint.coords()[axis] as f64;
+            let reach = jd.max_torque / jd.kp;
+            let rest = q + (self.targets[ji] - q).clamp(-reach, reach);
+            link.joint.set_spring(axis, jd.kp as f32, rest as f32);
+        }
+        let root = &mut world.bodies[self.bodies[0]];
+        root.reset_forces(false);
+        root.add_force(v3(self.wrench.force), true);
+        root.add_torque(v3(self.wrench.torque), true);
+    }
+
+    /// Read the state; `terrain` is the terrain collider.
+    pub fn read_state(
+        &self,
+        world: &PhysicsWorld,
+        terrain: ColliderHandle,
+        out: &mut HumanoidState,
+    ) {
+        let idx = self.multibody_index(world);
+        let mb = world
+            .multibody_joints
+            .get_multibody(idx)
+            .expect("multibody");
+        let vel = mb.generalized_velocity();
+        for ji in 0..NUM_JOINTS {
+            let (link_id, dof) = self.joint_links[ji];
+            let axis = 3 + JOINTS[ji].axis.index();
+            out.joint_pos[ji] = mb.link(link_id).expect("link").joint.coords()[axis] as f64;
+            out.joint_vel[ji] = vel[dof] as f64;
+        }
+        let quat = |rb: &RigidBody| {
+            let r = rb.position().rotation;
+            [r.w as f64, r.x as f64, r.y as f64, r.z as f64]
+        };
+        let p3 = |v: Vector| [v.x as f64, v.y as f64, v.z as f64];
+        let root = &world.bodies[self.bodies[0]];
+        out.root_position = p3(root.position().translation);
+        out.root_quat = quat(root);
+        out.root_linvel = p3(root.linvel());
+        out.root_angvel = p3(root.angvel());
+        for (bi, &h) in self.bodies.iter().enumerate() {
+            out.body_pos[bi] = p3(world.bodies[h].position().translation);
+        }
+        let head = &world.bodies[self.bodies[HEAD]];
+        out.head = math::transform(p3(head.position().translation), quat(head), HEAD_OFFSET);
+        out.contact = [false; NUM_BODIES];
+        out.terrain_contact = [false; NUM_BODIES];
+        for &(c, bi) in &self.colliders {
+            for pair in world.narrow_phase.contact_pairs_with(c) {
+                if pair.has_any_active_contact() {
+                    out.contact[bi] = true;
+                    if pair.collider1 == terrain || pair.collider2 == terrain {
+                        out.terrain_contact[bi] = true;
+                    }
+                }
+            }
+        }
+        let _ = &self.joint_bodies;
+    }
+}

@@ -1,0 +1,197 @@
+//! The rapier backend: rapier3d 0.36 (f32), reduced-coordinate multibody humanoids,
+//! a Z-up world (gravity along -Z).
+//!
+//! - `world.rs`: terrain height field, walls, ceilings, kinematic obstacles.
+//! - `humanoid.rs`: the multibody humanoid, PD through implicit joint springs.
+
+mod humanoid;
+mod world;
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+use plamo_interfaces::{PHYSICS_DT, Tick};
+use plamo_scenes::{ObstacleState, Scene};
+use rapier3d::prelude::*;
+
+use crate::obstacles::obstacle_pose;
+use crate::state::sanitize_action;
+use crate::{
+    BackendKind, HumanoidPose, HumanoidState, PhysicsBackend, PhysicsError, PhysicsSettings,
+    RootWrench,
+};
+use humanoid::RapierHumanoid;
+use world::SceneHandles;
+pub(crate) use world::validate_terrain;
+
+/// The rapier implementation of [`PhysicsBackend`].
+pub struct RapierBackend {
+    world: PhysicsWorld,
+    scene: Scene,
+    settings: PhysicsSettings,
+    handles: SceneHandles,
+    humanoids: Vec<RapierHumanoid>,
+    states: Vec<HumanoidState>,
+    obstacles: Vec<ObstacleState>,
+    tick: Tick,
+    /// Set when a step diverged; cleared when every humanoid has been reset since.
+    diverged: Vec<bool>,
+}
+
+impl RapierBackend {
+    /// Build the world for `scene`; humanoid `i` starts standing on the terrain at
+    /// (scene-origin + 1 m + 1.5 m * i, centre y), facing +X. Callers normally `reset`.
+    pub fn new(scene: &Scene, settings: &PhysicsSettings) -> Result<Self, PhysicsError> {
+        settings.validate()?;
+        let mut world = PhysicsWorld::new();
+        world.gravity = Vector::new(0.0, 0.0, -settings.gravity as f32);
+        world.integration_parameters.dt = PHYSICS_DT as f32;
+        world.integration_parameters.num_solver_iterations = settings.rapier_solver_iterations;
+        let handles = world::build_scene(&mut world, scene, settings)?;
+        let mut humanoids = Vec::with_capacity(settings.humanoids);
+        for i in 0..settings.humanoids {
+            let pose = default_pose(scene, i);
+            humanoids.push(RapierHumanoid::build(&mut world, &pose, settings.friction));
+        }
+        let obstacles = scene
+            .dynamic
+            .iter()
+            .map(|ob| obstacle_pose(ob, 0.0).0)
+            .collect();
+        let mut backend = Self {
+            world,
+            scene: scene.clone(),
+            settings: settings.clone(),
+            handles,
+            states: vec![HumanoidState::default(); humanoids.len()],
+            diverged: vec![false; humanoids.len()],
+            humanoids,
+            obstacles,
+            tick: Tick(0),
+        };
+        for i in 0..backend.humanoids.len() {
+            backend.read_state(i);
+        }
+        Ok(backend)
+    }
+
+    fn read_state(&mut self, i: usize) {
+        self.humanoids[i].read_state(&self.world, self.handles.terrain, &mut self.states[i]);
+    }
+
+    fn check_index(&self, index: usize) -> Result<(), PhysicsError> {
+        if index < self.humanoids.len() {
+            Ok(())
+        } else {
+            Err(PhysicsError::NoSuchHumanoid {
+                index,
+                count: self.humanoids.len(),
+            })
+        }
+    }
+
+    fn diverged(&self, reason: String) -> PhysicsError {
+        PhysicsError::Diverged {
+            backend: BackendKind::Rapier,
+            tick: self.tick.0,
+            reason,
+        }
+    }
+}
+
+/// Where humanoid `i` stands when the world is created.
+pub(crate) fn default_pose(scene: &Scene, i: usize) -> HumanoidPose {
+    let (lo, hi) = scene.terrain.bounds();
+    let x = (lo[0] + 1.0 + 1.5 * i as f64).min(hi[0]);
+    let y = 0.5 * (lo[1] + hi[1]);
+    HumanoidPose::standing_on(&scene.terrain, x, y, 0.0)
+}
+
+impl PhysicsBackend for RapierBackend {
+    fn kind(&self) -> BackendKind {
+        BackendKind::Rapier
+    }
+
+    fn num_humanoids(&self) -> usize {
+        self.humanoids.len()
+    }
+
+    fn tick(&self) -> Tick {
+        self.tick
+    }
+
+    fn reset_humanoid(&mut self, index: usize, pose: &HumanoidPose) -> Result<(), PhysicsError> {
+        self.check_index(index)?;
+        pose.validate()?;
+        self.humanoids[index].remove(&mut self.world);
+        self.humanoids[index] =
+            RapierHumanoid::build(&mut self.world, pose, self.settings.friction);
+        self.diverged[index] = false;
+        self.read_state(index);
+        Ok(())
+    }
+
+    fn set_action_for(
+        &mut self,
+        index: usize,
+        targets: &[f64],
+        root_wrench: Option<RootWrench>,
+    ) -> Result<(), PhysicsError> {
+        self.check_index(index)?;
+        let (targets, wrench) = sanitize_action(
+            targets,
+            root_wrench,
+            self.settings.max_root_force,
+            self.settings.max_root_torque,
+        )?;
+        let h = &mut self.humanoids[index];
+        h.targets = targets;
+        h.wrench = wrench;
+        Ok(())
+    }
+
+    fn step(&mut self) -> Result<(), PhysicsError> {
+        if self.diverged.iter().any(|d| *d) {
+            return Err(
+                self.diverged("a previous step diverged; reset every diverged humanoid".into())
+            );
+        }
+        let t_next = self.tick.advanced(1).seconds();
+        world::drive_obstacles(&mut self.world, &self.scene, &self.handles, t_next);
+        for h in &mut self.humanoids {
+            h.apply_controls(&mut self.world);
+        }
+        // rapier may panic on a degenerate state; report it as a divergence.
+        let world = &mut self.world;
+        let stepped = catch_unwind(AssertUnwindSafe(|| world.step()));
+        self.tick = self.tick.advanced(1);
+        if stepped.is_err() {
+            self.diverged.iter_mut().for_each(|d| *d = true);
+            return Err(self.diverged("rapier panicked inside the step".into()));
+        }
+        for (o, ob) in self.obstacles.iter_mut().zip(&self.scene.dynamic) {
+            *o = obstacle_pose(ob, t_next).0;
+        }
+        let quarantined = !self.world.quarantine().is_empty();
+        let mut bad = None;
+        for i in 0..self.humanoids.len() {
+            self.read_state(i);
+            if quarantined || !self.states[i].is_finite() {
+                self.diverged[i] = true;
+                bad.get_or_insert(i);
+            }
+        }
+        match bad {
+            Some(i) => Err(self.diverged(format!("humanoid {i} has a non-finite state"))),
+            None => Ok(()),
+        }
+    }
+
+    fn humanoid_state(&self, index: usize) -> Result<&HumanoidState, PhysicsError> {
+        self.check_index(index)?;
+        Ok(&self.states[index])
+    }
+
+    fn obstacles(&self) -> &[ObstacleState] {
+        &self.obstacles
+    }
+}

@@ -1,0 +1,193 @@
+//! Inputs (initial pose, root wrench) and outputs (humanoid state) of a backend, in
+//! world frame, Z up, metres, radians. Quaternions are `[w, x, y, z]`.
+
+use crate::{NUM_BODIES, NUM_JOINTS, PhysicsError, humanoid, math};
+
+/// Where and how a humanoid starts after `reset`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HumanoidPose {
+    /// Pelvis origin \[m\].
+    pub root_position: [f64; 3],
+    /// Heading: rotation about +Z \[rad\] (0 faces +X).
+    pub yaw: f64,
+    /// Joint angles \[rad\] in [`crate::JOINT_NAMES`] order; clamped into the limits.
+    pub joints: [f64; NUM_JOINTS],
+}
+
+impl HumanoidPose {
+    /// Standing in the rest pose with the feet on the ground at `ground_z` under (x, y).
+    pub fn standing(x: f64, y: f64, ground_z: f64, yaw: f64) -> Self {
+        Self {
+            root_position: [x, y, ground_z + humanoid::STANDING_PELVIS_HEIGHT + 0.002],
+            yaw,
+            joints: [0.0; NUM_JOINTS],
+        }
+    }
+
+    /// Standing on the scene's terrain at (x, y): the ground height is the highest
+    /// terrain sample under the feet, so no foot starts inside a slope or a step.
+    pub fn standing_on(terrain: &plamo_scenes::HeightGrid, x: f64, y: f64, yaw: f64) -> Self {
+        let mut ground = f64::NEG_INFINITY;
+        for dx in [-0.1, 0.0, 0.2] {
+            for dy in [-0.15, 0.0, 0.15] {
+                ground = ground.max(terrain.height_at(x + dx, y + dy));
+            }
+        }
+        Self::standing(x, y, ground, yaw)
+    }
+
+    /// Check for non-finite values.
+    pub fn validate(&self) -> Result<(), PhysicsError> {
+        check_finite("pose.root_position", &self.root_position)?;
+        check_finite("pose.yaw", &[self.yaw])?;
+        check_finite("pose.joints", &self.joints)
+    }
+
+    /// Root quaternion `[w, x, y, z]`.
+    pub fn root_quat(&self) -> [f64; 4] {
+        math::quat_from_yaw(self.yaw)
+    }
+
+    /// Joint angles clamped into their limits.
+    pub fn clamped_joints(&self) -> [f64; NUM_JOINTS] {
+        std::array::from_fn(|i| humanoid::clamp_to_range(i, self.joints[i]))
+    }
+}
+
+/// A residual wrench on the pelvis, world frame, applied at the pelvis centre of
+/// mass and held until the next action.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RootWrench {
+    /// Force \[N\].
+    pub force: [f64; 3],
+    /// Torque \[N m\].
+    pub torque: [f64; 3],
+}
+
+/// The state of one humanoid after a step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HumanoidState {
+    /// Pelvis origin \[m\].
+    pub root_position: [f64; 3],
+    /// Pelvis orientation `[w, x, y, z]`.
+    pub root_quat: [f64; 4],
+    /// Pelvis origin velocity \[m/s\], world frame.
+    pub root_linvel: [f64; 3],
+    /// Pelvis angular velocity \[rad/s\], world frame.
+    pub root_angvel: [f64; 3],
+    /// Head centre ([`crate::HEAD_OFFSET`] in the head frame) \[m\].
+    pub head: [f64; 3],
+    /// Joint angles \[rad\], [`crate::JOINT_NAMES`] order.
+    pub joint_pos: [f64; NUM_JOINTS],
+    /// Joint velocities \[rad/s\].
+    pub joint_vel: [f64; NUM_JOINTS],
+    /// Body origins \[m\], [`crate::BODY_NAMES`] order.
+    pub body_pos: [[f64; 3]; NUM_BODIES],
+    /// Whether each body touches anything (terrain, wall, ceiling, obstacle) during
+    /// the last step (all false right after a reset).
+    pub contact: [bool; NUM_BODIES],
+    /// Whether each body touches the terrain height field.
+    pub terrain_contact: [bool; NUM_BODIES],
+}
+
+impl Default for HumanoidState {
+    fn default() -> Self {
+        Self {
+            root_position: [0.0; 3],
+            root_quat: [1.0, 0.0, 0.0, 0.0],
+            root_linvel: [0.0; 3],
+            root_angvel: [0.0; 3],
+            head: [0.0; 3],
+            joint_pos: [0.0; NUM_JOINTS],
+            joint_vel: [0.0; NUM_JOINTS],
+            body_pos: [[0.0; 3]; NUM_BODIES],
+            contact: [false; NUM_BODIES],
+            terrain_contact: [false; NUM_BODIES],
+        }
+    }
+}
+
+impl HumanoidState {
+    /// Whether every number is finite.
+    pub fn is_finite(&self) -> bool {
+        self.root_position
+            .iter()
+            .chain(&self.root_quat)
+            .chain(&self.root_linvel)
+            .chain(&self.root_angvel)
+            .chain(&self.head)
+            .chain(&self.joint_pos)
+            .chain(&self.joint_vel)
+            .chain(self.body_pos.iter().flatten())
+            .all(|v| v.is_finite())
+    }
+
+    /// Heading of the pelvis: yaw of its forward (+X) axis \[rad\].
+    pub fn heading(&self) -> f64 {
+        let f = math::rotate(self.root_quat, [1.0, 0.0, 0.0]);
+        f[1].atan2(f[0])
+    }
+
+    /// Every f64 as its bit pattern, for determinism checks.
+    pub fn bits(&self) -> Vec<u64> {
+        let mut v: Vec<u64> = self
+            .root_position
+            .iter()
+            .chain(&self.root_quat)
+            .chain(&self.root_linvel)
+            .chain(&self.root_angvel)
+            .chain(&self.head)
+            .chain(&self.joint_pos)
+            .chain(&self.joint_vel)
+            .chain(self.body_pos.iter().flatten())
+            .map(|x| x.to_bits())
+            .collect();
+        v.extend(
+            self.contact
+                .iter()
+                .chain(&self.terrain_contact)
+                .map(|&b| b as u64),
+        );
+        v
+    }
+}
+
+/// `Err(NonFinite)` at the first NaN or infinity in `values`.
+pub(crate) fn check_finite(field: &'static str, values: &[f64]) -> Result<(), PhysicsError> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(PhysicsError::NonFinite {
+            field,
+            index,
+            value: values[index],
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Validate and normalise an action: length and finiteness are errors, targets are
+/// clamped into the joint limits and the wrench is scaled into its bounds.
+pub(crate) fn sanitize_action(
+    targets: &[f64],
+    wrench: Option<RootWrench>,
+    max_force: f64,
+    max_torque: f64,
+) -> Result<([f64; NUM_JOINTS], RootWrench), PhysicsError> {
+    if targets.len() != NUM_JOINTS {
+        return Err(PhysicsError::WrongActionLength {
+            expected: NUM_JOINTS,
+            got: targets.len(),
+        });
+    }
+    check_finite("targets", targets)?;
+    let clamped = std::array::from_fn(|i| humanoid::clamp_to_range(i, targets[i]));
+    let w = wrench.unwrap_or_default();
+    check_finite("root_wrench.force", &w.force)?;
+    check_finite("root_wrench.torque", &w.torque)?;
+    Ok((
+        clamped,
+        RootWrench {
+            force: math::clamp_norm(w.force, max_force),
+            torque: math::clamp_norm(w.torque, max_torque),
+        },
+    ))
+}
