@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod plan;
 mod scenes;
 
 /// PlaMo: plan and move a physics-simulated humanoid through rich 3D scenes.
@@ -18,11 +19,14 @@ enum Command {
     /// List, show, validate, render and generate scenes.
     #[command(subcommand)]
     Scenes(scenes::ScenesCommand),
+    /// Plan a route on a scene and write the plan (JSON), a map and a profile plot.
+    Plan(plan::PlanArgs),
 }
 
 /// Run the parsed command; the exit code says whether it succeeded.
 pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Scenes(cmd) => scenes::run(cmd),
+        Command::Plan(args) => plan::run(args),
     }
 }

@@ -9,6 +9,7 @@ mod colors;
 mod fonts;
 mod map;
 mod overlay;
+pub mod profile;
 
 pub use colors::{TERRAIN_COLORS, color_at};
 pub use map::render_map;
