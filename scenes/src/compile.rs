@@ -156,17 +156,15 @@ impl Ctx<'_> {
                 HeightGrid::flat(t.origin, size, res, 0.0)
             }
         };
-        if t.grid.is_some() {
-            if let Some(size) = t.size {
-                let (lo, hi) = grid.bounds();
-                let have = [hi[0] - lo[0], hi[1] - lo[1]];
-                if (have[0] - size[0]).abs() > res * 0.5 || (have[1] - size[1]).abs() > res * 0.5 {
-                    return Err(self.bad(
-                        "terrain.size",
-                        size,
-                        &format!("the grid's own size {have:?} (or leave size out)"),
-                    ));
-                }
+        if let (Some(_), Some(size)) = (&t.grid, t.size) {
+            let (lo, hi) = grid.bounds();
+            let have = [hi[0] - lo[0], hi[1] - lo[1]];
+            if (have[0] - size[0]).abs() > res * 0.5 || (have[1] - size[1]).abs() > res * 0.5 {
+                return Err(self.bad(
+                    "terrain.size",
+                    size,
+                    &format!("the grid's own size {have:?} (or leave size out)"),
+                ));
             }
         }
         if grid.nx < 2 || grid.ny < 2 {

@@ -294,10 +294,11 @@ fn min_headroom(scene: &Scene, fp: &Footprint) -> Option<f64> {
         for b in 0..=n {
             let x = lo[0] + (hi[0] - lo[0]) * a as f64 / n as f64;
             let y = lo[1] + (hi[1] - lo[1]) * b as f64 / n as f64;
-            if fp.contains(x, y) && g.contains(x, y) {
-                if let Some(h) = scene.headroom_at(x, y) {
-                    best = Some(best.map_or(h, |m: f64| m.min(h)));
-                }
+            if !(fp.contains(x, y) && g.contains(x, y)) {
+                continue;
+            }
+            if let Some(h) = scene.headroom_at(x, y) {
+                best = Some(best.map_or(h, |m: f64| m.min(h)));
             }
         }
     }
