@@ -211,7 +211,7 @@ pub struct PlanMessage {
 pub type PlannerInput = PhysicsOutput;
 
 /// Controller input for one agent: its state, its plan and the terrain around it.
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
 #[repr(C)]
 #[type_name("plamo::ControllerInput")]
 pub struct ControllerInput {
@@ -225,18 +225,6 @@ pub struct ControllerInput {
     pub state: HumanoidState,
     /// The current plan.
     pub plan: PlanMessage,
-}
-
-impl Default for ControllerInput {
-    fn default() -> Self {
-        Self {
-            tick: 0,
-            agent: 0,
-            reserved: 0,
-            state: HumanoidState::default(),
-            plan: PlanMessage::default(),
-        }
-    }
 }
 
 /// Controller output: one agent's action.

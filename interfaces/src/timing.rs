@@ -24,7 +24,7 @@ impl Tick {
     }
     /// Whether a control step happens on this tick (every 4th tick).
     pub fn is_control(self) -> bool {
-        self.0 % PHYSICS_STEPS_PER_CONTROL as u64 == 0
+        self.0.is_multiple_of(PHYSICS_STEPS_PER_CONTROL as u64)
     }
     /// The tick `n` physics steps later.
     pub fn advanced(self, n: u64) -> Tick {

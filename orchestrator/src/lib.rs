@@ -2,4 +2,5 @@
 //! pictures and recordings the `plamo` CLI writes.
 #![warn(missing_docs)]
 
+pub mod ipc;
 pub mod viz;
