@@ -52,15 +52,16 @@ fn node(cfg: &Config, name: &str) -> Node<ipc::Service> {
         .unwrap()
 }
 
-/// Start a server thread for `run` and return a connected client and the thread.
-fn start(
-    run: &str,
-) -> (
+/// A client, its server thread, the orchestrator's node, and the "server ended" flag.
+type Started = (
     RemoteComponent<u64, u64>,
     thread::JoinHandle<Result<u64, IpcError>>,
     Node<ipc::Service>,
     Arc<AtomicBool>,
-) {
+);
+
+/// Start a server thread for `run` and return a connected client and the thread.
+fn start(run: &str) -> Started {
     let run = RunId::new(run).unwrap();
     let cfg = run_config(&run).unwrap();
     let names = ServiceNames::new(&run, ComponentKind::Controller, 0);
