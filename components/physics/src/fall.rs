@@ -71,7 +71,7 @@ pub fn detect_fall(
 ) -> Option<FallReason> {
     let height = state.head[2] - ground_under_head;
     let min = posture.min_head_height();
-    if !(height >= min) {
+    if height.is_nan() || height < min {
         return Some(FallReason::HeadTooLow { height, min });
     }
     (0..NUM_BODIES)
@@ -87,8 +87,10 @@ mod tests {
 
     #[test]
     fn head_height_and_contacts() {
-        let mut s = HumanoidState::default();
-        s.head = [0.0, 0.0, 1.5];
+        let mut s = HumanoidState {
+            head: [0.0, 0.0, 1.5],
+            ..HumanoidState::default()
+        };
         assert_eq!(detect_fall(&s, Posture::Upright, 0.0), None);
         assert!(matches!(
             detect_fall(&s, Posture::Upright, 0.7),

@@ -29,8 +29,6 @@ pub(crate) struct RapierHumanoid {
     pub bodies: [RigidBodyHandle; NUM_BODIES],
     /// Every rigid body including intermediate links, in insertion order.
     pub all_bodies: Vec<RigidBodyHandle>,
-    /// Rigid body of each joint's link.
-    joint_bodies: [RigidBodyHandle; NUM_JOINTS],
     /// Multibody link id and DoF index of each joint.
     joint_links: [(usize, usize); NUM_JOINTS],
     /// Collider -> body index.
@@ -177,7 +175,6 @@ impl RapierHumanoid {
         let mut h = RapierHumanoid {
             bodies,
             all_bodies,
-            joint_bodies,
             joint_links,
             colliders,
             targets: joints,
@@ -210,9 +207,8 @@ impl RapierHumanoid {
             .multibody_joints
             .get_multibody_mut(idx)
             .expect("multibody");
-        for ji in 0..NUM_JOINTS {
+        for (ji, jd) in JOINTS.iter().enumerate() {
             let (link_id, _) = self.joint_links[ji];
-            let jd = &JOINTS[ji];
             let axis = 3 + jd.axis.index();
             let link = mb.link_mut(link_id).expect("link");
             let q = link.joint.coords()[axis] as f64;
@@ -239,9 +235,9 @@ impl RapierHumanoid {
             .get_multibody(idx)
             .expect("multibody");
         let vel = mb.generalized_velocity();
-        for ji in 0..NUM_JOINTS {
+        for (ji, jd) in JOINTS.iter().enumerate() {
             let (link_id, dof) = self.joint_links[ji];
-            let axis = 3 + JOINTS[ji].axis.index();
+            let axis = 3 + jd.axis.index();
             out.joint_pos[ji] = mb.link(link_id).expect("link").joint.coords()[axis] as f64;
             out.joint_vel[ji] = vel[dof] as f64;
         }
@@ -272,6 +268,5 @@ impl RapierHumanoid {
                 }
             }
         }
-        let _ = &self.joint_bodies;
     }
 }

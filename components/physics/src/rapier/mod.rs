@@ -21,6 +21,7 @@ use crate::{
 };
 use humanoid::RapierHumanoid;
 use world::SceneHandles;
+#[cfg(feature = "mujoco")]
 pub(crate) use world::validate_terrain;
 
 /// The rapier implementation of [`PhysicsBackend`].

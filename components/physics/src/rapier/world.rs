@@ -44,7 +44,12 @@ pub(crate) fn pose_from_yaw(p: [f64; 3], yaw: f64) -> Pose {
 /// Check the terrain grid: at least 2x2 finite samples, positive resolution.
 pub(crate) fn validate_terrain(scene: &Scene) -> Result<(), PhysicsError> {
     let g = &scene.terrain;
-    if g.nx < 2 || g.ny < 2 || g.heights.len() != g.nx * g.ny || !(g.resolution > 0.0) {
+    if g.nx < 2
+        || g.ny < 2
+        || g.heights.len() != g.nx * g.ny
+        || g.resolution.is_nan()
+        || g.resolution <= 0.0
+    {
         return Err(PhysicsError::InvalidScene {
             reason: format!(
                 "terrain must be at least 2x2 samples with nx*ny heights and resolution > 0 (nx {}, ny {}, {} heights, resolution {})",
@@ -177,7 +182,7 @@ pub(crate) fn drive_obstacles(
 mod tests {
     use super::*;
     use plamo_scenes::HeightGrid;
-    use rapier3d::parry::query::{Ray, RayCast};
+    use rapier3d::parry::query::Ray;
 
     #[test]
     fn heightfield_matches_grid() {
