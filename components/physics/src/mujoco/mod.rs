@@ -357,3 +357,50 @@ impl PhysicsBackend for MujocoBackend {
         &self.obstacles
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plamo_scenes::HeightGrid;
+
+    /// Pins the height-field layout (row = grid j, column = grid i) with ray casts.
+    #[test]
+    fn heightfield_matches_grid() {
+        let mut g = HeightGrid::flat([2.0, -1.0], [3.0, 4.0], 0.25, 0.0);
+        for jj in 0..g.ny {
+            for ii in 0..g.nx {
+                let [x, y] = g.position(ii, jj);
+                g.heights[jj * g.nx + ii] = 0.3 * x - 0.2 * y + 0.1 * x * y;
+            }
+        }
+        let scene = Scene {
+            name: "t".into(),
+            description: String::new(),
+            terrain: g.clone(),
+            walls: vec![],
+            dynamic: vec![],
+            tops: vec![],
+            landmarks: vec![],
+        };
+        let mut b = MujocoBackend::new(&scene, &PhysicsSettings::default()).unwrap();
+        // The humanoid stands at (3, 1); cast away from it.
+        for &(x, y) in &[
+            (2.0, -1.0),
+            (2.3, 2.9),
+            (4.9, -0.7),
+            (4.5, 2.5),
+            (4.0, -0.5),
+        ] {
+            let (geom, dist) = b
+                .data
+                .ray(&[x, y, 10.0], &[0.0, 0.0, -1.0], None, true, None, None);
+            assert_eq!(geom, Some(b.terrain_geom), "({x},{y}) hits the terrain");
+            let z = 10.0 - dist;
+            assert!(
+                (z - g.height_at(x, y)).abs() < 0.01,
+                "({x},{y}): {z} vs {}",
+                g.height_at(x, y)
+            );
+        }
+    }
+}
