@@ -83,6 +83,9 @@ pub enum ControllerError {
         /// Which joint is missing or extra.
         reason: String,
     },
+    /// The physics backend failed during a rollout.
+    #[error("physics: {0}")]
+    Physics(#[from] plamo_physics::PhysicsError),
     /// The ONNX runtime (tract) failed to load, optimise or run the network.
     #[error("ONNX model {path}: {stage} failed: {source}")]
     Onnx {

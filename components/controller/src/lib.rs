@@ -9,14 +9,20 @@
 #![warn(missing_docs)]
 
 mod error;
+mod gait;
 mod math;
 mod metrics;
 mod observation;
 mod onnx_policy;
 mod policy;
+mod rollout;
 mod settings;
 
 pub use error::{ControllerError, Result};
+pub use gait::{
+    DEFAULT_GAIT_PARAMS, FormParams, GAIT_PARAMS_VERSION, GaitParams, LegGeometry,
+    ModelBasedController, ResidualGains, leg_fk, leg_ik,
+};
 pub use metrics::{
     MetricsAccumulator, MetricsSummary, PathRewardWeights, RewardTerms, StepSample, path_reward,
 };
@@ -26,4 +32,5 @@ pub use observation::{
 };
 pub use onnx_policy::{OnnxPolicy, PolicySidecar};
 pub use policy::{Action, Policy, RootWrench};
+pub use rollout::{StraightPath, flat_scene, run_straight};
 pub use settings::{ControllerSettings, GRAVITY};

@@ -41,7 +41,6 @@ pub(crate) fn to_heading_frame(heading: f64, v: [f64; 3]) -> [f64; 3] {
 }
 
 /// Rotates a heading-frame vector back into the world (rotation by `heading` about Z).
-#[allow(dead_code)] // used by the model-based gait
 pub(crate) fn from_heading_frame(heading: f64, v: [f64; 3]) -> [f64; 3] {
     let (s, c) = heading.sin_cos();
     [c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]]

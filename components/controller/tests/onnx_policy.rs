@@ -18,6 +18,8 @@ const JOINTS: [&str; 3] = ["hip", "knee", "ankle"];
 
 fn dir(name: &str) -> PathBuf {
     let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("onnx_policy_{name}"));
+    // Start empty: files left by an earlier run must not change the outcome.
+    let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
 }

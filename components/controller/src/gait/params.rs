@@ -1,0 +1,229 @@
+//! Gait parameters: one [`FormParams`] per locomotion form, loaded from a versioned
+//! TOML file (`params/gait.toml`, built in), blended by requested height and speed.
+
+use std::path::{Path, PathBuf};
+
+use crate::error::{ControllerError, Result};
+
+/// Version of the gait parameter file format.
+pub const GAIT_PARAMS_VERSION: u32 = 1;
+
+/// The built-in parameter file.
+pub const DEFAULT_GAIT_PARAMS: &str = include_str!("../../params/gait.toml");
+
+/// Parameters of one locomotion form (see `params/gait.toml` for units).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FormParams {
+    /// Nominal head height of the form \[m\].
+    pub head_height: f64,
+    /// Nominal speed \[m/s\].
+    pub speed: f64,
+    /// Swing duration \[s\].
+    pub step_time: f64,
+    /// Swing-foot clearance \[m\].
+    pub swing_height: f64,
+    /// Pelvis origin height above ground \[m\].
+    pub pelvis_height: f64,
+    /// Pelvis pitch target, + forward \[rad\].
+    pub trunk_pitch: f64,
+    /// Extra pelvis pitch per m/s \[rad s/m\].
+    pub lean_per_speed: f64,
+    /// Spine pitch target \[rad\].
+    pub spine_pitch: f64,
+    /// Foot placement ahead of the root per m/s \[s\].
+    pub foot_fwd_gain: f64,
+    /// Foot placement per m/s of velocity error \[s\].
+    pub foot_err_gain: f64,
+    /// Half distance between the feet \[m\].
+    pub foot_width: f64,
+    /// Lateral placement per m/s of sideways velocity \[s\].
+    pub foot_lat_gain: f64,
+    /// Virtual torso stiffness \[N m/rad\].
+    pub torso_kp: f64,
+    /// Virtual torso damping \[N m s/rad\].
+    pub torso_kd: f64,
+    /// Stance hip yaw per rad of heading error \[-\].
+    pub yaw_gain: f64,
+    /// Arm swing amplitude \[rad\].
+    pub arm_swing: f64,
+    /// Stance-foot target moved back by this many seconds of desired velocity, so the
+    /// stance hip pushes the pelvis forward \[s\].
+    pub stance_push: f64,
+}
+
+impl FormParams {
+    /// Linear blend `(1 - t) * a + t * b`, `t` clamped to \[0, 1\].
+    pub fn lerp(&self, b: &FormParams, t: f64) -> FormParams {
+        let t = t.clamp(0.0, 1.0);
+        // Exact at the ends, so a form's own parameters come back unchanged.
+        let l = |x: f64, y: f64| {
+            if t == 1.0 { y } else { x + (y - x) * t }
+        };
+        FormParams {
+            head_height: l(self.head_height, b.head_height),
+            speed: l(self.speed, b.speed),
+            step_time: l(self.step_time, b.step_time),
+            swing_height: l(self.swing_height, b.swing_height),
+            pelvis_height: l(self.pelvis_height, b.pelvis_height),
+            trunk_pitch: l(self.trunk_pitch, b.trunk_pitch),
+            lean_per_speed: l(self.lean_per_speed, b.lean_per_speed),
+            spine_pitch: l(self.spine_pitch, b.spine_pitch),
+            foot_fwd_gain: l(self.foot_fwd_gain, b.foot_fwd_gain),
+            foot_err_gain: l(self.foot_err_gain, b.foot_err_gain),
+            foot_width: l(self.foot_width, b.foot_width),
+            foot_lat_gain: l(self.foot_lat_gain, b.foot_lat_gain),
+            torso_kp: l(self.torso_kp, b.torso_kp),
+            torso_kd: l(self.torso_kd, b.torso_kd),
+            yaw_gain: l(self.yaw_gain, b.yaw_gain),
+            arm_swing: l(self.arm_swing, b.arm_swing),
+            stance_push: l(self.stance_push, b.stance_push),
+        }
+    }
+
+    fn validate(&self, form: &'static str) -> Result<()> {
+        let bad = |field: &'static str, reason: &str| {
+            Err(ControllerError::InvalidSettings {
+                field,
+                reason: format!("[{form}] {reason}"),
+            })
+        };
+        if !(self.step_time > 0.05 && self.step_time < 2.0) {
+            return bad("step_time", "must be in (0.05, 2) s");
+        }
+        if !(self.pelvis_height > 0.2 && self.pelvis_height < 1.0) {
+            return bad("pelvis_height", "must be in (0.2, 1.0) m");
+        }
+        if !(self.head_height > 0.2 && self.head_height < 2.0) {
+            return bad("head_height", "must be in (0.2, 2.0) m");
+        }
+        if !(self.swing_height >= 0.0 && self.swing_height < 0.4) {
+            return bad("swing_height", "must be in [0, 0.4) m");
+        }
+        Ok(())
+    }
+}
+
+/// Gains of the bounded residual root wrench.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ResidualGains {
+    /// Horizontal force per kg per m/s of velocity error \[1/s\].
+    pub vel_gain: f64,
+    /// Vertical force per kg per m of pelvis height error \[1/s^2\].
+    pub height_gain: f64,
+    /// Vertical force per kg per m/s of vertical velocity \[1/s\].
+    pub height_damping: f64,
+    /// Torque per rad of pelvis tilt \[N m/rad\].
+    pub rot_gain: f64,
+    /// Torque per rad/s of pelvis tilt rate \[N m s/rad\].
+    pub rot_damping: f64,
+}
+
+/// The whole parameter file.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GaitParams {
+    /// File format version ([`GAIT_PARAMS_VERSION`]).
+    pub version: u32,
+    /// Walking.
+    pub walk: FormParams,
+    /// Running.
+    pub run: FormParams,
+    /// Crouch-walking.
+    pub crouch: FormParams,
+    /// Residual wrench gains.
+    pub residual: ResidualGains,
+}
+
+impl Default for GaitParams {
+    fn default() -> Self {
+        // The built-in file is tested to parse and validate.
+        Self::from_toml(DEFAULT_GAIT_PARAMS, Path::new("<built-in gait.toml>"))
+            .expect("built-in gait parameters are valid")
+    }
+}
+
+impl GaitParams {
+    /// Parses and validates parameters; `origin` names the source in errors.
+    pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
+        let p: GaitParams = toml::from_str(text).map_err(|source| ControllerError::Toml {
+            path: origin.to_path_buf(),
+            source,
+        })?;
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// Reads a parameter file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|source| ControllerError::Io {
+            path: PathBuf::from(path),
+            source,
+        })?;
+        Self::from_toml(&text, path)
+    }
+
+    /// Checks the version and every form's ranges.
+    pub fn validate(&self) -> Result<()> {
+        if self.version != GAIT_PARAMS_VERSION {
+            return Err(ControllerError::InvalidSettings {
+                field: "version",
+                reason: format!(
+                    "gait parameter file version {} (this build reads {GAIT_PARAMS_VERSION})",
+                    self.version
+                ),
+            });
+        }
+        self.walk.validate("walk")?;
+        self.run.validate("run")?;
+        self.crouch.validate("crouch")
+    }
+
+    /// The form for a requested head height above ground \[m\] and speed \[m/s\]:
+    /// crouch and walk blended by height, then walk and run blended by speed.
+    pub fn blend(&self, head_height: f64, speed: f64) -> FormParams {
+        let upright = self.walk.lerp(
+            &self.run,
+            (speed - self.walk.speed) / (self.run.speed - self.walk.speed),
+        );
+        let t = (head_height - self.crouch.head_height)
+            / (self.walk.head_height - self.crouch.head_height);
+        self.crouch.lerp(&upright, t)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn built_in_parameters_parse_and_blend() {
+        let p = GaitParams::default();
+        let w = p.blend(1.47, 1.0);
+        assert_eq!(w, p.walk);
+        assert_eq!(p.blend(1.47, 5.0), p.run);
+        assert_eq!(p.blend(0.5, 0.5), p.crouch);
+        let mid = p.blend(1.47, 2.0);
+        assert!(mid.step_time < p.walk.step_time && mid.step_time > p.run.step_time);
+    }
+
+    #[test]
+    fn bad_files_name_the_problem() {
+        let e = GaitParams::from_toml(
+            &DEFAULT_GAIT_PARAMS.replace("version = 1", "version = 9"),
+            Path::new("x.toml"),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("version 9"), "{e}");
+        let e = GaitParams::from_toml(
+            &DEFAULT_GAIT_PARAMS.replace("step_time = 0.40", "step_time = 0.0"),
+            Path::new("x.toml"),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("[walk]"), "{e}");
+        let e =
+            GaitParams::from_toml("version = 1\n[walk]\nfoo = 1", Path::new("y.toml")).unwrap_err();
+        assert!(e.to_string().contains("y.toml"), "{e}");
+    }
+}

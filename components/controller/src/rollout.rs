@@ -1,0 +1,149 @@
+//! Closed-loop rollouts: physics + observation + policy + metrics at 30/120 Hz, for
+//! tests, examples and parameter tuning. The orchestrator runs the real lockstep; this
+//! is the controller's own test bench on a straight constant-speed path (paper
+//! Table 2's protocol).
+
+use plamo_interfaces::PHYSICS_STEPS_PER_CONTROL;
+use plamo_physics::{
+    BackendKind, HEAD, HumanoidPose, HumanoidState, PhysicsSettings, create_backend,
+};
+use plamo_scenes::{HeightGrid, Scene};
+
+use crate::ModelBasedController;
+use crate::error::Result;
+use crate::metrics::{MetricsAccumulator, MetricsSummary, PathRewardWeights, StepSample};
+use crate::observation::{
+    HumanoidSnapshot, NUM_WAYPOINTS, Observation, WAYPOINT_SPACING, Waypoint,
+};
+use crate::policy::{Action, Policy};
+use crate::settings::ControllerSettings;
+
+impl From<&HumanoidState> for HumanoidSnapshot {
+    fn from(s: &HumanoidState) -> Self {
+        HumanoidSnapshot {
+            root_pos: s.root_position,
+            root_quat: s.root_quat,
+            root_lin_vel: s.root_linvel,
+            root_ang_vel: s.root_angvel,
+            head_pos: s.head,
+            joint_pos: s.joint_pos.to_vec(),
+            joint_vel: s.joint_vel.to_vec(),
+            body_pos: s.body_pos.to_vec(),
+        }
+    }
+}
+
+/// A straight path along +X at constant speed and head height.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StraightPath {
+    /// Start of the head path (x, y) \[m\].
+    pub start: [f64; 2],
+    /// Speed \[m/s\].
+    pub speed: f64,
+    /// Head height above the terrain \[m\].
+    pub head_height: f64,
+}
+
+impl StraightPath {
+    /// The plan's head point at time `t` \[s\] on `scene`.
+    pub fn at(&self, scene: &Scene, t: f64) -> Waypoint {
+        let x = self.start[0] + self.speed * t.max(0.0);
+        let y = self.start[1];
+        Waypoint {
+            x,
+            y,
+            z: scene.height_at(x, y) + self.head_height,
+            v: self.speed,
+        }
+    }
+}
+
+/// A flat scene long enough for a straight rollout of `length` metres along +X.
+pub fn flat_scene(length: f64) -> Scene {
+    Scene {
+        name: "flat".into(),
+        description: "controller test bench".into(),
+        terrain: HeightGrid::flat([-5.0, -10.0], [length + 10.0, 20.0], 0.1, 0.0),
+        walls: vec![],
+        dynamic: vec![],
+        tops: vec![],
+        landmarks: vec![],
+    }
+}
+
+/// Runs `policy` along `path` for `duration` \[s\] with the chosen physics engine. A
+/// fall is counted, and the humanoid is put back standing on the plan's current
+/// point (ProtoMotions-style reset).
+pub fn run_straight(
+    backend: BackendKind,
+    scene: &Scene,
+    path: StraightPath,
+    duration: f64,
+    policy: &mut dyn Policy,
+    settings: &ControllerSettings,
+) -> Result<MetricsSummary> {
+    let mut physics = create_backend(backend, scene, &PhysicsSettings::default())?;
+    let start = path.at(scene, 0.0);
+    physics.reset(&HumanoidPose::standing_on(
+        &scene.terrain,
+        start.x,
+        start.y,
+        0.0,
+    ))?;
+    policy.reset();
+    let mut obs = Observation::new(ModelBasedController::LAYOUT);
+    let mut action = Action::zeros(ModelBasedController::LAYOUT.num_joints);
+    let mut metrics =
+        MetricsAccumulator::new(PathRewardWeights::default(), settings.body_weight(), vec![]);
+    let steps = (duration * plamo_interfaces::CONTROL_HZ as f64).round() as u64;
+    let mut plan = [Waypoint::default(); NUM_WAYPOINTS];
+    for c in 0..steps {
+        let t = c as f64 / plamo_interfaces::CONTROL_HZ as f64;
+        let state = physics.state().clone();
+        let ground = scene.height_at(state.head[0], state.head[1]);
+        let fallen = settings.is_fallen(state.head[2] - ground, path.head_height);
+        let target = path.at(scene, t);
+        let max_other = state
+            .body_pos
+            .iter()
+            .enumerate()
+            .filter(|(b, _)| *b != HEAD)
+            .map(|(_, p)| p[2])
+            .fold(f64::NEG_INFINITY, f64::max);
+        let heading = state.heading();
+        metrics.push(&StepSample {
+            t,
+            head: state.head,
+            target: [target.x, target.y, target.z],
+            head_dir: [heading.cos(), heading.sin(), 0.0],
+            path_dir: [path.speed, 0.0, 0.0],
+            max_other_body_z: max_other,
+            fallen,
+            residual: action.root_wrench,
+        });
+        if fallen {
+            physics.reset(&HumanoidPose::standing_on(
+                &scene.terrain,
+                target.x,
+                target.y,
+                0.0,
+            ))?;
+            policy.reset();
+            continue;
+        }
+        for (i, w) in plan.iter_mut().enumerate() {
+            *w = path.at(scene, t + WAYPOINT_SPACING * (i + 1) as f64);
+        }
+        obs.update(&HumanoidSnapshot::from(&state), &plan, scene)?;
+        policy.act(&obs, &mut action)?;
+        physics.set_action(
+            &action.pd_targets,
+            action.root_wrench.map(|w| plamo_physics::RootWrench {
+                force: w.force,
+                torque: w.torque,
+            }),
+        )?;
+        physics.step_n(PHYSICS_STEPS_PER_CONTROL as usize)?;
+    }
+    Ok(metrics.summary())
+}

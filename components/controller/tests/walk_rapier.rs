@@ -1,0 +1,43 @@
+//! Closed loop: the default model-based controller walks a straight constant-speed
+//! path on flat ground in rapier without falling and tracks the head path.
+
+use plamo_controller::{
+    ControllerSettings, ModelBasedController, StraightPath, flat_scene, run_straight,
+};
+use plamo_physics::BackendKind;
+
+#[test]
+fn straight_walk_on_flat_ground_does_not_fall() {
+    let settings = ControllerSettings {
+        body_mass: plamo_physics::humanoid::total_mass(),
+        ..Default::default()
+    };
+    let mut policy = ModelBasedController::new(settings.clone()).unwrap();
+    let path = StraightPath {
+        start: [0.0, 0.0],
+        speed: 0.6,
+        head_height: 1.47,
+    };
+    let duration = 12.0;
+    let scene = flat_scene(path.speed * duration + 5.0);
+    let m = run_straight(
+        BackendKind::Rapier,
+        &scene,
+        path,
+        duration,
+        &mut policy,
+        &settings,
+    )
+    .unwrap();
+    eprintln!("{}", serde_json::to_string_pretty(&m).unwrap());
+    assert_eq!(m.falls, 0, "fell");
+    // Paper Table 2, walk on flat: XY 0.24 m, Z 0.21 m.
+    assert!(m.xy_err_mean < 0.3, "xy error {}", m.xy_err_mean);
+    assert!(m.z_err_mean < 0.21, "z error {}", m.z_err_mean);
+    assert!(
+        m.residual_force_mean <= 0.25,
+        "residual {}",
+        m.residual_force_mean
+    );
+    assert!(m.residual_force_peak <= settings.residual_force_cap + 1e-9);
+}
