@@ -36,7 +36,7 @@ pub use planner::{PlanStatus, Planner, PlannerInput, PlannerOutput, Progress, Re
 pub use refine::PathPoint;
 pub use settings::PlannerSettings;
 pub use speed_oracle::{SpeedProblem, forward_backward, travel_time};
-pub use speed_qp::solve_speed_qp;
+pub use speed_qp::{solve_speed_qp, solve_speed_socp};
 pub use timing::{Trajectory, Waypoint};
 
 #[cfg(test)]
