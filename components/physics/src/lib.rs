@@ -8,6 +8,23 @@
 //!   [`plamo_scenes::Scene`] and [`PhysicsSettings`].
 //! - [`detect_fall`]: fall detection over a [`HumanoidState`].
 //!
+//! # Cargo feature `mujoco`
+//! Off by default, so crates that do not ask for MuJoCo never need the native
+//! library. With it, mujoco-rs 7.0.0 links MuJoCo 3.17.0 from
+//! `third_party/mujoco/lib` (installed by `scripts/install-mujoco.sh`; the workspace
+//! `.cargo/config.toml` sets `MUJOCO_DYNAMIC_LINK_DIR` and an `$ORIGIN`-relative
+//! rpath, so `cargo test`/`run`/`bench` need no environment variables). The
+//! workspace test command enables it:
+//! `scripts/install-mujoco.sh && cargo test --workspace --features plamo-physics/mujoco`.
+//! Without it, `create_backend(BackendKind::Mujoco, ..)` returns
+//! [`PhysicsError::Unavailable`].
+//!
+//! # One description, two engines
+//! The humanoid is typed Rust data ([`humanoid::BODIES`], [`humanoid::JOINTS`]); the
+//! MuJoCo backend writes MJCF from it ([`humanoid_mjcf`] with the feature) and the
+//! rapier backend builds a multibody from the same tables, one link per hinge. No
+//! MJCF parser is involved on the rapier side (rapier3d-mjcf was not used).
+//!
 //! ```
 //! use plamo_physics::{BackendKind, HumanoidPose, NUM_JOINTS, PhysicsSettings, create_backend};
 //! use plamo_scenes::{HeightGrid, Scene};
