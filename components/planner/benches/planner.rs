@@ -11,7 +11,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use plamo_planner::synthetic::{ball_scene, hills_scene};
 use plamo_planner::{
     AStar, Components, PlanGrid, Planner, PlannerSettings, Prediction, SearchLimits, SpeedProblem,
-    forward_backward, predict_conflict, solve_speed_qp,
+    forward_backward, predict_conflict, solve_speed_qp, solve_speed_socp,
 };
 use plamo_scenes::{Footprint, Wall, builtin};
 use rand::{Rng, SeedableRng};
@@ -155,8 +155,11 @@ fn bench_speed(c: &mut Criterion) {
         decel: 0.1,
     };
     let mut g = c.benchmark_group("speed_n1000");
-    g.bench_function("clarabel_socp", |b| {
+    g.bench_function("clarabel_qp", |b| {
         b.iter(|| black_box(solve_speed_qp(&p).unwrap()))
+    });
+    g.bench_function("clarabel_socp_time_objective", |b| {
+        b.iter(|| black_box(solve_speed_socp(&p).unwrap()))
     });
     g.bench_function("forward_backward_baseline", |b| {
         b.iter(|| black_box(forward_backward(&p).unwrap()))

@@ -3,7 +3,7 @@
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
-use crate::grid::PlanGrid;
+use crate::grid::{DIRS, PlanGrid};
 
 /// Cells A* must not enter (dynamic obstacles at their predicted positions) and an
 /// optional window (i0, j0, i1, j1), inclusive, that bounds a local search.
@@ -126,11 +126,22 @@ impl AStar {
                 return Some(self.reconstruct(g, start, c));
             }
             let gc = self.g[c];
-            for d in 0..8 {
-                let Some((b, w)) = g.edge_for(c, d, min_head) else {
+            let (ci, cj) = ((c % g.nx) as isize, (c / g.nx) as isize);
+            for (d, &(di, dj)) in DIRS.iter().enumerate() {
+                let (bi, bj) = (ci + di, cj + dj);
+                if bi < 0 || bj < 0 || bi >= g.nx as isize || bj >= g.ny as isize {
                     continue;
+                }
+                let b = bj as usize * g.nx + bi as usize;
+                let w = if d < 4 {
+                    g.cost[d][c]
+                } else {
+                    g.cost[d - 4][b]
                 };
-                if self.closed[b] == gen_ {
+                if !w.is_finite() || self.closed[b] == gen_ {
+                    continue;
+                }
+                if g.has_tops && g.edge_for(c, d, min_head).is_none() {
                     continue;
                 }
                 let nb = gc + w as f64;

@@ -35,6 +35,8 @@ pub struct PlanGrid {
     pub headroom: Vec<f32>,
     /// Whether the cell is clear of walls by at least the character radius.
     pub free: Vec<bool>,
+    /// Whether any cell has a ceiling (lets searches skip headroom checks).
+    pub has_tops: bool,
     /// Edge cost for the four forward directions `DIRS[0..4]`, `INFINITY` when the
     /// edge is removed (wall, corner cut, infeasible slope) \[m\].
     pub cost: [Vec<f32>; 4],
@@ -143,12 +145,14 @@ impl PlanGrid {
                 }
             }
         }
+        let has_tops = headroom.iter().any(|h| h.is_finite());
         Self {
             origin,
             resolution: res,
             nx,
             ny,
             height,
+            has_tops,
             headroom,
             free,
             cost,
