@@ -10,6 +10,10 @@ if [ -x scripts/install-mujoco.sh ]; then
     scripts/install-mujoco.sh
 fi
 
+# Doctests are linked in a temporary directory, where the $ORIGIN-relative rpath of
+# .cargo/config.toml cannot reach third_party/; give rustdoc the absolute path.
+export RUSTDOCFLAGS="-C link-args=-Wl,-rpath,$PWD/third_party/mujoco/lib"
+
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
 
