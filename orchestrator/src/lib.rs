@@ -3,4 +3,8 @@
 #![warn(missing_docs)]
 
 pub mod ipc;
+pub mod lockstep;
+pub mod processes;
+pub mod record;
+pub mod spec;
 pub mod viz;

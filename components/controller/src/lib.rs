@@ -17,6 +17,7 @@ mod onnx_policy;
 mod policy;
 mod rollout;
 mod settings;
+mod tune;
 
 pub use error::{ControllerError, Result};
 pub use gait::{
@@ -34,3 +35,6 @@ pub use onnx_policy::{OnnxPolicy, PolicySidecar};
 pub use policy::{Action, Policy, RootWrench};
 pub use rollout::{StraightPath, flat_scene, run_straight};
 pub use settings::{ControllerSettings, GRAVITY};
+pub use tune::{
+    Cost, Form, Generation, Rng, Sample, SepCmaEs, TuneSettings, evaluate, to_toml, tune,
+};

@@ -48,6 +48,7 @@
 #![warn(missing_docs)]
 
 mod backend;
+mod component;
 mod error;
 mod fall;
 pub mod humanoid;
@@ -60,6 +61,7 @@ mod settings;
 mod state;
 
 pub use backend::{BackendKind, PhysicsBackend, create_backend};
+pub use component::{PhysicsComponent, Placement, reset_request};
 pub use error::{ParseBackendKindError, PhysicsError};
 pub use fall::{FallReason, Posture, detect_fall};
 pub use humanoid::{

@@ -13,6 +13,7 @@
 #![warn(missing_docs)]
 
 mod astar;
+mod component;
 mod connectivity;
 mod dynamic;
 mod error;
@@ -27,6 +28,7 @@ pub mod synthetic;
 mod timing;
 
 pub use astar::{AStar, GridPath, SearchLimits};
+pub use component::{FLAG_FINISHED, FLAG_INFEASIBLE, FLAG_REPLANNED, PlannerComponent};
 pub use connectivity::{BLOCKED, Components};
 pub use dynamic::{Conflict, Prediction, predict, predict_conflict};
 pub use error::{PlanError, SpeedFailure, UnreachableReason};

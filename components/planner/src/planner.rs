@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use plamo_interfaces::{Component, ComponentError, Outcome, Tick};
+use plamo_interfaces::Tick;
 use plamo_scenes::{ObstacleState, Region, Scene};
 use serde::{Deserialize, Serialize};
 
@@ -675,38 +675,4 @@ pub(crate) fn set_speeds(
         p.v = b.max(0.0).sqrt();
     }
     Ok(())
-}
-
-impl Component for Planner {
-    type Input = PlannerInput;
-    type Output = PlannerOutput;
-    const NAME: &'static str = "planner";
-
-    fn step(
-        &mut self,
-        tick: Tick,
-        input: &PlannerInput,
-        output: &mut PlannerOutput,
-    ) -> Result<Outcome, ComponentError> {
-        match self.plan_step(tick, input) {
-            Ok(out) => {
-                let done = out.status == PlanStatus::Finished;
-                *output = out;
-                Ok(if done {
-                    Outcome::Finished
-                } else {
-                    Outcome::Continue
-                })
-            }
-            Err(PlanError::InvalidInput { field, reason }) => Err(ComponentError::InvalidInput {
-                component: Self::NAME,
-                field,
-                reason,
-            }),
-            Err(e) => Err(ComponentError::Failed {
-                component: Self::NAME,
-                reason: e.to_string(),
-            }),
-        }
-    }
 }

@@ -3,7 +3,9 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod component;
 mod plan;
+mod run;
 mod scenes;
 
 /// PlaMo: plan and move a physics-simulated humanoid through rich 3D scenes.
@@ -21,6 +23,12 @@ enum Command {
     Scenes(scenes::ScenesCommand),
     /// Plan a route on a scene and write the plan (JSON), a map and a profile plot.
     Plan(plan::PlanArgs),
+    /// Run planner, controller and physics in lockstep: the humanoid carries out the
+    /// instructions; a summary per instruction follows.
+    Run(run::RunArgs),
+    /// Serve one component over iceoryx2 (started by `plamo run --processes`).
+    #[command(hide = true)]
+    Component(component::ComponentArgs),
 }
 
 /// Run the parsed command; the exit code says whether it succeeded.
@@ -28,5 +36,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Scenes(cmd) => scenes::run(cmd),
         Command::Plan(args) => plan::run(args),
+        Command::Run(args) => run::run(args),
+        Command::Component(args) => component::run(args),
     }
 }

@@ -18,5 +18,5 @@ pub use client::RemoteComponent;
 pub use envelope::{Envelope, EnvelopeKind};
 pub use error::IpcError;
 pub use liveness::{NodeRole, dead_nodes, end_run, remove_stale_resources};
-pub use server::serve;
+pub use server::{ORCHESTRATOR_NODE, serve};
 pub use setup::{Channels, IpcSettings, run_config};

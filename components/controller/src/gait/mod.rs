@@ -3,14 +3,18 @@
 //! A SIMBICON-style biped gait whose parameters ([`GaitParams`]) are blended by the
 //! requested head height (crouch-walk <-> walk) and speed (walk <-> run):
 //! - the plan's next waypoint (0.5 s ahead, relative to the head) gives the desired
-//!   velocity (so position errors are corrected) and the heading error;
+//!   velocity (so position errors are corrected; rate-limited to [`MAX_ACCEL`] so a
+//!   start from rest speeds up step by step) and the heading error;
 //! - the swing foot follows a path from its lift-off point to a SIMBICON foot
 //!   placement (ahead of the root by velocity and velocity error, sideways by the
-//!   lateral velocity), lifted over the local height map, by two-segment leg IK;
-//! - legs switch at swing-foot touchdown (after half a step; 1.5 steps at most);
+//!   lateral velocity), lifted over the local height map, by two-segment leg IK; the
+//!   path is followed kd/kp ahead, the lag of a PD servo behind a moving target;
+//! - legs switch at swing-foot touchdown (after half a step; 1.5 steps at most); the
+//!   leg targets' jump at the switch is faded out over [`SWITCH_BLEND`];
 //! - the stance leg holds the pelvis height by IK, and its hip adds virtual-torso
 //!   torque from pelvis tilt error realised through the PD targets (offset = torque /
-//!   kp); the stance hip yaw turns the pelvis towards the path;
+//!   kp) minus the swing hip's torque (SIMBICON); the stance hip yaw turns the pelvis
+//!   towards the path;
 //! - a bounded residual root wrench (cap in [`ControllerSettings`]) helps with speed,
 //!   height and tilt; it is part of the action and reported by the metrics.
 
@@ -82,7 +86,19 @@ pub struct ModelBasedController {
     swing_start_rel_stance: [f64; 3],
     started: bool,
     last_wrench: RootWrench,
+    /// Leg targets of the previous action \[rad\] (for the cross-fade at a switch).
+    last_targets: [f64; NUM_JOINTS],
+    /// Target jump at the last leg switch, faded out over [`SWITCH_BLEND`] \[rad\].
+    switch_offset: [f64; NUM_JOINTS],
+    /// Rate-limited desired velocity, heading frame \[m/s\].
+    v_cmd: [f64; 2],
 }
+
+/// Largest change of the desired velocity \[m/s^2\].
+const MAX_ACCEL: f64 = 1.5;
+
+/// Time over which the target jump at a leg switch is faded out \[s\].
+const SWITCH_BLEND: f64 = 0.1;
 
 /// Gait quantities of the last step, for diagnostics.
 impl ModelBasedController {
@@ -122,6 +138,9 @@ impl ModelBasedController {
             swing_start_rel_stance: [0.0; 3],
             started: false,
             last_wrench: RootWrench::default(),
+            last_targets: [0.0; NUM_JOINTS],
+            switch_offset: [0.0; NUM_JOINTS],
+            v_cmd: [0.0; 2],
         })
     }
 
@@ -194,11 +213,20 @@ impl Policy for ModelBasedController {
         let wp0 = obs.waypoints[0];
         let wp1 = obs.waypoints[1];
         let speed = obs.waypoint_speeds[0].max(0.0);
-        let vmax = 1.3 * speed + 0.3;
-        let v_des = clamp_norm(
+        let vmax = 1.15 * speed + 0.2;
+        let v_plan = clamp_norm(
             [wp0[0] / WAYPOINT_SPACING, wp0[1] / WAYPOINT_SPACING, 0.0],
             vmax,
         );
+        // Rate-limited desired velocity: a start from rest accelerates step by step.
+        if !self.started {
+            self.v_cmd = [vx, vy];
+        }
+        let dv_max = MAX_ACCEL * CONTROL_DT;
+        for (c, p) in self.v_cmd.iter_mut().zip(v_plan) {
+            *c += (p - *c).clamp(-dv_max, dv_max);
+        }
+        let v_des = [self.v_cmd[0], self.v_cmd[1], 0.0];
         let heading_err = if wp1[0].hypot(wp1[1]) > 0.2 {
             wrap_angle(wp1[1].atan2(wp1[0]))
         } else {
@@ -213,6 +241,7 @@ impl Policy for ModelBasedController {
         // Gait phase and touchdown-triggered leg switch.
         let feet = [obs.body_pos[FEET[0]], obs.body_pos[FEET[1]]];
         let swing = 1 - self.stance;
+        let mut switched = false;
         if !self.started {
             self.started = true;
             // First swing: the foot on the side the body drifts towards stays down.
@@ -229,6 +258,7 @@ impl Policy for ModelBasedController {
             if touchdown || self.phase > 1.5 * form.step_time {
                 self.stance = swing;
                 self.phase = 0.0;
+                switched = true;
                 self.swing_start_rel_stance = sub(feet[1 - self.stance], feet[self.stance]);
             }
         }
@@ -237,7 +267,9 @@ impl Policy for ModelBasedController {
         let side = |leg: usize| if leg == 0 { -1.0 } else { 1.0 };
 
         // Swing foot target (heading frame, relative to the root).
-        let s_lin = (self.phase / form.step_time).min(1.0);
+        // The PD servo lags a moving target by kd/kp: follow the path that far ahead.
+        let lead = JOINTS[j.hip[0][1]].kd / self.hip_kp;
+        let s_lin = ((self.phase + lead) / form.step_time).min(1.0);
         let s = s_lin * s_lin * (3.0 - 2.0 * s_lin);
         let final_xy = [
             form.foot_fwd_gain * vx + form.foot_err_gain * (vx - v_des[0]),
@@ -288,9 +320,22 @@ impl Policy for ModelBasedController {
             let [hx_ik, hy_ik, knee] = leg_ik(&self.legs, p);
             let (mut hx, mut hy, mut hz) = (hx_ik, hy_ik, 0.0);
             if leg == stance {
-                // Virtual torso control through the stance hip's PD offset.
-                hy += (form.torso_kp * (pitch - pitch_des) + form.torso_kd * wy) / self.hip_kp;
-                hx += (form.torso_kp * roll + form.torso_kd * wx) / self.hip_kp;
+                // Virtual torso control through the stance hip's PD offset, plus the
+                // reaction of the swing hip's torque (SIMBICON: the stance hip takes
+                // -torso - swing torque).
+                let sw_torque = |axis: usize, target: f64| {
+                    let ji = j.hip[swing][axis];
+                    let jd = &JOINTS[ji];
+                    (jd.kp * (target - obs.joint_pos[ji]) - jd.kd * obs.joint_vel[ji])
+                        .clamp(-jd.max_torque, jd.max_torque)
+                };
+                let comp = form.swing_comp;
+                hy += (form.torso_kp * (pitch - pitch_des) + form.torso_kd * wy
+                    - comp * sw_torque(1, targets[j.hip[swing][1]]))
+                    / self.hip_kp;
+                hx += (form.torso_kp * roll + form.torso_kd * wx
+                    - comp * sw_torque(0, targets[j.hip[swing][0]]))
+                    / self.hip_kp;
                 hz = (-form.yaw_gain * heading_err).clamp(-0.4, 0.4);
             }
             targets[j.hip[leg][0]] = hx;
@@ -299,6 +344,21 @@ impl Policy for ModelBasedController {
             targets[j.knee[leg]] = knee;
             targets[j.ankle[leg][0]] = -(pitch_des + hy_ik + knee);
             targets[j.ankle[leg][1]] = -hx_ik;
+        }
+        // Cross-fade the legs' target jump at a switch.
+        let legs_joints = [j.hip[0], j.hip[1]]
+            .into_iter()
+            .flatten()
+            .chain(j.knee)
+            .chain(j.ankle[0])
+            .chain(j.ankle[1]);
+        let fade = (1.0 - self.phase / SWITCH_BLEND).max(0.0);
+        for ji in legs_joints {
+            if switched {
+                self.switch_offset[ji] = self.last_targets[ji] - targets[ji];
+            }
+            targets[ji] += fade * self.switch_offset[ji];
+            self.last_targets[ji] = targets[ji];
         }
         // Upper body: spine pitch from the form, head kept level, arms swinging.
         targets[j.spine[1]] = form.spine_pitch;
@@ -347,6 +407,7 @@ impl Policy for ModelBasedController {
     fn reset(&mut self) {
         self.started = false;
         self.phase = 0.0;
+        self.switch_offset = [0.0; NUM_JOINTS];
     }
 
     fn name(&self) -> &str {

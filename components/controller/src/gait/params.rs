@@ -50,6 +50,8 @@ pub struct FormParams {
     /// Stance-foot target moved back by this many seconds of desired velocity, so the
     /// stance hip pushes the pelvis forward \[s\].
     pub stance_push: f64,
+    /// Fraction of the swing hip's torque the stance hip cancels (SIMBICON) \[-\].
+    pub swing_comp: f64,
 }
 
 impl FormParams {
@@ -78,6 +80,7 @@ impl FormParams {
             yaw_gain: l(self.yaw_gain, b.yaw_gain),
             arm_swing: l(self.arm_swing, b.arm_swing),
             stance_push: l(self.stance_push, b.stance_push),
+            swing_comp: l(self.swing_comp, b.swing_comp),
         }
     }
 
@@ -216,11 +219,10 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("version 9"), "{e}");
-        let e = GaitParams::from_toml(
-            &DEFAULT_GAIT_PARAMS.replace("step_time = 0.40", "step_time = 0.0"),
-            Path::new("x.toml"),
-        )
-        .unwrap_err();
+        let mut bad = GaitParams::default();
+        bad.walk.step_time = 0.0;
+        let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
+            .unwrap_err();
         assert!(e.to_string().contains("[walk]"), "{e}");
         let e =
             GaitParams::from_toml("version = 1\n[walk]\nfoo = 1", Path::new("y.toml")).unwrap_err();

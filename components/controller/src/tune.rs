@@ -1,0 +1,294 @@
+//! Offline "training" of the model-based gait: separable CMA-ES over one form's
+//! parameters, minimising tracking error + residual + falls over randomised
+//! constant-speed straight paths. Deterministic per seed (rollouts are deterministic,
+//! candidates are drawn from a seeded generator, rayon results are collected in order).
+
+mod cmaes;
+
+use rayon::prelude::*;
+
+use plamo_physics::BackendKind;
+
+pub use cmaes::{Rng, Sample, SepCmaEs};
+
+use crate::error::{ControllerError, Result};
+use crate::gait::{FormParams, GaitParams, ModelBasedController};
+use crate::rollout::{StraightPath, flat_scene, run_straight};
+use crate::settings::ControllerSettings;
+
+/// The locomotion form whose parameters are tuned.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Form {
+    /// Walk (head 1.47 m).
+    Walk,
+    /// Run (head 1.47 m).
+    Run,
+    /// Crouch-walk (head 0.8 m).
+    Crouch,
+}
+
+impl std::str::FromStr for Form {
+    type Err = ControllerError;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "walk" => Ok(Form::Walk),
+            "run" => Ok(Form::Run),
+            "crouch" => Ok(Form::Crouch),
+            _ => Err(ControllerError::InvalidSettings {
+                field: "form",
+                reason: format!("unknown form `{s}` (walk, run, crouch)"),
+            }),
+        }
+    }
+}
+
+impl Form {
+    /// Requested head height \[m\] and speed range \[m/s\] the form is tuned over.
+    pub fn task(self) -> (f64, [f64; 2]) {
+        match self {
+            Form::Walk => (1.47, [1.0, 2.0]),
+            Form::Run => (1.47, [2.0, 4.0]),
+            Form::Crouch => (0.8, [0.5, 2.0]),
+        }
+    }
+
+    fn params(self, p: &mut GaitParams) -> &mut FormParams {
+        match self {
+            Form::Walk => &mut p.walk,
+            Form::Run => &mut p.run,
+            Form::Crouch => &mut p.crouch,
+        }
+    }
+}
+
+/// Tuned fields with their search box (units of the field, see [`FormParams`]).
+const TUNED: [(&str, f64, f64); 13] = [
+    ("step_time", 0.25, 0.55),
+    ("swing_height", 0.04, 0.16),
+    ("pelvis_height", 0.80, 0.93),
+    ("trunk_pitch", -0.05, 0.25),
+    ("lean_per_speed", 0.0, 0.10),
+    ("foot_fwd_gain", 0.15, 0.40),
+    ("foot_err_gain", 0.0, 0.25),
+    ("foot_width", 0.05, 0.14),
+    ("foot_lat_gain", 0.1, 0.45),
+    ("torso_kp", 200.0, 1500.0),
+    ("torso_kd", 10.0, 150.0),
+    ("stance_push", 0.0, 0.2),
+    ("swing_comp", 0.0, 1.0),
+];
+
+fn field<'a>(f: &'a mut FormParams, name: &str) -> &'a mut f64 {
+    match name {
+        "step_time" => &mut f.step_time,
+        "swing_height" => &mut f.swing_height,
+        "pelvis_height" => &mut f.pelvis_height,
+        "trunk_pitch" => &mut f.trunk_pitch,
+        "lean_per_speed" => &mut f.lean_per_speed,
+        "foot_fwd_gain" => &mut f.foot_fwd_gain,
+        "foot_err_gain" => &mut f.foot_err_gain,
+        "foot_width" => &mut f.foot_width,
+        "foot_lat_gain" => &mut f.foot_lat_gain,
+        "torso_kp" => &mut f.torso_kp,
+        "torso_kd" => &mut f.torso_kd,
+        "stance_push" => &mut f.stance_push,
+        _ => &mut f.swing_comp,
+    }
+}
+
+/// Tuning settings.
+#[derive(Debug, Clone)]
+pub struct TuneSettings {
+    /// Form to tune.
+    pub form: Form,
+    /// Generations of CMA-ES.
+    pub generations: u32,
+    /// Seed of the candidate and scenario draws.
+    pub seed: u64,
+    /// Physics engines every candidate is rolled out in.
+    pub backends: Vec<BackendKind>,
+    /// Rollouts per candidate and backend (speeds stratified over the form's range).
+    pub rollouts: usize,
+    /// Simulated seconds per rollout \[s\].
+    pub duration: f64,
+    /// Initial step size in the normalised \[0, 1\] box \[-\].
+    pub sigma0: f64,
+    /// Controller settings (residual caps) used in the rollouts.
+    pub controller: ControllerSettings,
+}
+
+/// Cost of one parameter set: mean over rollouts of
+/// `xy_err + z_err + residual_force_mean + 0.5 * falls` (metres, fraction of m*g, count).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct Cost {
+    /// Total cost \[-\].
+    pub total: f64,
+    /// Mean falls per rollout.
+    pub falls: f64,
+    /// Mean head XY error \[m\].
+    pub xy: f64,
+    /// Mean head Z error \[m\].
+    pub z: f64,
+    /// Mean residual force, fraction of m*g.
+    pub residual: f64,
+}
+
+/// Progress after one generation.
+#[derive(Debug, Clone)]
+pub struct Generation {
+    /// Generation number, from 1.
+    pub index: u32,
+    /// Best cost so far.
+    pub best: Cost,
+    /// Step size now.
+    pub sigma: f64,
+}
+
+/// Evaluates `params` on the scenarios drawn for `seed` (same seed, same scenarios).
+pub fn evaluate(params: &GaitParams, s: &TuneSettings, seed: u64) -> Result<Cost> {
+    let (head, [lo, hi]) = s.form.task();
+    let mut rng = Rng::new(seed);
+    let jobs: Vec<(BackendKind, f64)> = s
+        .backends
+        .iter()
+        .flat_map(|&b| (0..s.rollouts).map(move |i| (b, i)))
+        .map(|(b, i)| {
+            // Stratified speeds over the range, each jittered within its stratum.
+            let k = s.rollouts.max(1) as f64;
+            (b, lo + (hi - lo) * (i as f64 + rng.uniform()) / k)
+        })
+        .collect();
+    let results: Vec<Result<Cost>> = jobs
+        .par_iter()
+        .map(|&(backend, speed)| {
+            let mut policy = ModelBasedController::with_params(*params, s.controller.clone())?;
+            let path = StraightPath {
+                start: [0.0, 0.0],
+                speed,
+                head_height: head,
+            };
+            let scene = flat_scene(speed * s.duration + 5.0);
+            let m = run_straight(
+                backend,
+                &scene,
+                path,
+                s.duration,
+                &mut policy,
+                &s.controller,
+            )?;
+            let falls = f64::from(m.falls);
+            Ok(Cost {
+                total: m.xy_err_mean + m.z_err_mean + m.residual_force_mean + 0.5 * falls,
+                falls,
+                xy: m.xy_err_mean,
+                z: m.z_err_mean,
+                residual: m.residual_force_mean,
+            })
+        })
+        .collect();
+    let mut sum = Cost::default();
+    for r in &results {
+        let c = r.as_ref().map_err(|e| ControllerError::InvalidSettings {
+            field: "rollout",
+            reason: e.to_string(),
+        })?;
+        sum.total += c.total;
+        sum.falls += c.falls;
+        sum.xy += c.xy;
+        sum.z += c.z;
+        sum.residual += c.residual;
+    }
+    let k = results.len().max(1) as f64;
+    Ok(Cost {
+        total: sum.total / k,
+        falls: sum.falls / k,
+        xy: sum.xy / k,
+        z: sum.z / k,
+        residual: sum.residual / k,
+    })
+}
+
+fn decode(base: &GaitParams, form: Form, x: &[f64]) -> GaitParams {
+    let mut p = *base;
+    let f = form.params(&mut p);
+    for (&(name, lo, hi), v) in TUNED.iter().zip(x) {
+        *field(f, name) = lo + (hi - lo) * v.clamp(0.0, 1.0);
+    }
+    p
+}
+
+fn encode(base: &GaitParams, form: Form) -> Vec<f64> {
+    let mut p = *base;
+    let f = form.params(&mut p);
+    TUNED
+        .iter()
+        .map(|&(name, lo, hi)| ((*field(f, name) - lo) / (hi - lo)).clamp(0.0, 1.0))
+        .collect()
+}
+
+/// Runs CMA-ES from `base`; returns the best parameters found and their cost. The
+/// scenarios (stratified, jittered speeds over the form's range) are drawn once from
+/// the seed, so the objective is deterministic and the best is monotone.
+pub fn tune(
+    base: &GaitParams,
+    s: &TuneSettings,
+    mut on_generation: impl FnMut(&Generation),
+) -> Result<(GaitParams, Cost)> {
+    let mut rng = Rng::new(s.seed);
+    let mut es = SepCmaEs::new(encode(base, s.form), s.sigma0, 0);
+    let mut best = (*base, evaluate(base, s, s.seed)?);
+    for g in 1..=s.generations {
+        // One scenario set for the whole run: a deterministic objective.
+        let scenario_seed = s.seed;
+        let samples = es.ask(&mut rng);
+        let mut costs = Vec::with_capacity(samples.len());
+        let mut gen_best: Option<(GaitParams, Cost)> = None;
+        for smp in &samples {
+            let p = decode(base, s.form, &smp.x);
+            // Out-of-box candidates are clamped and pay for the distance.
+            let outside: f64 = smp.x.iter().map(|v| (v - v.clamp(0.0, 1.0)).powi(2)).sum();
+            let c = match p.validate() {
+                Ok(()) => evaluate(&p, s, scenario_seed)?,
+                Err(_) => Cost {
+                    total: 1e3,
+                    ..Default::default()
+                },
+            };
+            costs.push(c.total + outside);
+            if gen_best.as_ref().is_none_or(|(_, b)| c.total < b.total) {
+                gen_best = Some((p, c));
+            }
+        }
+        es.tell(&samples, &costs);
+        if let Some((p, c)) = gen_best
+            && c.total < best.1.total
+        {
+            best = (p, c);
+        }
+        on_generation(&Generation {
+            index: g,
+            best: best.1,
+            sigma: es.sigma,
+        });
+    }
+    // Final score on the base scenarios.
+    let c = evaluate(&best.0, s, s.seed)?;
+    Ok((best.0, c))
+}
+
+/// The parameters as a TOML file with a header naming the command that made them.
+pub fn to_toml(params: &GaitParams, header: &str) -> Result<String> {
+    let body = toml::to_string(params).map_err(|e| ControllerError::InvalidSettings {
+        field: "params",
+        reason: e.to_string(),
+    })?;
+    let mut out = String::new();
+    for line in header.lines() {
+        out.push_str("# ");
+        out.push_str(line);
+        out.push('\n');
+    }
+    out.push_str("# Units: see `FormParams`/`ResidualGains` docs (m, s, rad, N m/rad).\n");
+    out.push_str(&body);
+    Ok(out)
+}

@@ -1,0 +1,44 @@
+//! Closed loop in MuJoCo: the default model-based controller walks a straight path at
+//! 1.0 m/s on flat ground without falling and tracks the head path.
+#![cfg(feature = "mujoco")]
+
+use plamo_controller::{
+    ControllerSettings, ModelBasedController, StraightPath, flat_scene, run_straight,
+};
+use plamo_physics::BackendKind;
+
+#[test]
+fn straight_walk_at_1_m_per_s_does_not_fall_in_mujoco() {
+    let settings = ControllerSettings {
+        body_mass: plamo_physics::humanoid::total_mass(),
+        ..Default::default()
+    };
+    let mut policy = ModelBasedController::new(settings.clone()).unwrap();
+    let path = StraightPath {
+        start: [0.0, 0.0],
+        speed: 1.0,
+        head_height: 1.47,
+    };
+    let duration = 10.0;
+    let scene = flat_scene(path.speed * duration + 5.0);
+    let m = run_straight(
+        BackendKind::Mujoco,
+        &scene,
+        path,
+        duration,
+        &mut policy,
+        &settings,
+    )
+    .unwrap();
+    eprintln!("{}", serde_json::to_string_pretty(&m).unwrap());
+    assert_eq!(m.falls, 0, "fell");
+    // Paper Table 2, walk on flat: XY 0.24 m, Z 0.21 m.
+    assert!(m.xy_err_mean < 0.3, "xy error {}", m.xy_err_mean);
+    assert!(m.z_err_mean < 0.1, "z error {}", m.z_err_mean);
+    assert!(
+        m.residual_force_mean <= 0.2,
+        "residual {}",
+        m.residual_force_mean
+    );
+    assert!(m.residual_force_peak <= settings.residual_force_cap + 1e-9);
+}

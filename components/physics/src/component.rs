@@ -1,0 +1,330 @@
+//! The physics world as a [`Component`] over the interface messages: every agent's
+//! action in ([`PhysicsInput`]), every agent's state and the obstacles out
+//! ([`PhysicsOutput`]). The same `step` runs in-process and behind an IPC server.
+//!
+//! # Protocol
+//! - A step at control tick `c` (a multiple of 4) applies each agent's PD targets and
+//!   root wrench, takes [`PHYSICS_STEPS_PER_CONTROL`] steps of 1/120 s, and reports
+//!   the world at tick `c + 4`. The input's tick and the step's tick must both equal
+//!   the world's current tick, else [`ComponentError::WrongTick`].
+//! - An input with `agent_count == 0` steps nothing and reports the world at its
+//!   current tick: the orchestrator's first read, before tick 0's control step.
+//! - An action with `joint_count == 0` ([`reset_request`]) puts that agent back
+//!   standing on the terrain at its current XY and heading, at rest, before the
+//!   steps (how the orchestrator recovers a fallen humanoid).
+//! - `fallen` in each reported state uses the most lenient posture (crawl): the head
+//!   is below 0.15 m above the ground or touches the terrain. Posture-aware fall
+//!   rules belong to whoever knows the requested posture (the orchestrator).
+//! - External obstacles are reported after the scene's obstacles; the backends do not
+//!   collide with them (they are scene-independent markers for hosts).
+
+use plamo_interfaces::{
+    AgentAction, Component, ComponentError, MAX_AGENTS, MAX_BODIES, MAX_JOINTS, MAX_OBSTACLES,
+    ObstacleSample, Outcome, PHYSICS_STEPS_PER_CONTROL, PhysicsInput, PhysicsOutput, Tick,
+};
+use plamo_scenes::Scene;
+
+use crate::{
+    BackendKind, HumanoidPose, NUM_BODIES, NUM_JOINTS, PhysicsBackend, PhysicsError,
+    PhysicsSettings, Posture, RootWrench, create_backend, detect_fall,
+};
+
+/// A start (or reset) placement of one humanoid: x, y \[m\] and heading \[rad\].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// X \[m\].
+    pub x: f64,
+    /// Y \[m\].
+    pub y: f64,
+    /// Heading about +Z \[rad\] (0 faces +X).
+    pub yaw: f64,
+}
+
+/// The physics world behind the component contract (see the module docs).
+pub struct PhysicsComponent {
+    backend: Box<dyn PhysicsBackend>,
+    scene: Scene,
+    agents: usize,
+}
+
+/// An action asking physics to put `agent` back on its feet where it is (see the
+/// module docs).
+pub fn reset_request(tick: u64, agent: u32) -> AgentAction {
+    AgentAction {
+        tick,
+        agent,
+        joint_count: 0,
+        ..AgentAction::default()
+    }
+}
+
+fn failed(e: PhysicsError) -> ComponentError {
+    ComponentError::Failed {
+        component: PhysicsComponent::NAME,
+        reason: e.to_string(),
+    }
+}
+
+fn to_message_quat(q: [f64; 4]) -> [f64; 4] {
+    // Physics stores [w, x, y, z]; messages carry (x, y, z, w).
+    [q[1], q[2], q[3], q[0]]
+}
+
+impl PhysicsComponent {
+    /// A world of `kind` for `scene` with one humanoid per placement, each standing
+    /// on the terrain. `settings.humanoids` is overridden by the placement count.
+    pub fn new(
+        kind: BackendKind,
+        scene: &Scene,
+        settings: &PhysicsSettings,
+        placements: &[Placement],
+    ) -> Result<Self, PhysicsError> {
+        if placements.is_empty() || placements.len() > MAX_AGENTS {
+            return Err(PhysicsError::InvalidSettings {
+                field: "humanoids",
+                reason: format!("must be in 1..={MAX_AGENTS}, got {}", placements.len()),
+            });
+        }
+        let settings = PhysicsSettings {
+            humanoids: placements.len(),
+            ..settings.clone()
+        };
+        let mut backend = create_backend(kind, scene, &settings)?;
+        for (i, p) in placements.iter().enumerate() {
+            backend.reset_humanoid(
+                i,
+                &HumanoidPose::standing_on(&scene.terrain, p.x, p.y, p.yaw),
+            )?;
+        }
+        Ok(Self {
+            backend,
+            scene: scene.clone(),
+            agents: placements.len(),
+        })
+    }
+
+    /// The world's current tick.
+    pub fn tick(&self) -> Tick {
+        self.backend.tick()
+    }
+
+    /// The backend (read-only), e.g. for the rich per-agent state.
+    pub fn backend(&self) -> &dyn PhysicsBackend {
+        self.backend.as_ref()
+    }
+
+    /// Write the world as it is now into `out`.
+    pub fn observe(
+        &self,
+        external: &[ObstacleSample],
+        out: &mut PhysicsOutput,
+    ) -> Result<(), PhysicsError> {
+        out.tick = self.backend.tick().0;
+        out.agent_count = self.agents as u32;
+        for i in 0..self.agents {
+            let s = self.backend.humanoid_state(i)?;
+            let m = &mut out.agents[i];
+            m.root_position = s.root_position;
+            m.root_orientation = to_message_quat(s.root_quat);
+            m.root_linear_velocity = s.root_linvel;
+            m.root_angular_velocity = s.root_angvel;
+            m.head_position = s.head;
+            m.joint_count = NUM_JOINTS as u32;
+            m.body_count = NUM_BODIES as u32;
+            m.joint_angles = [0.0; MAX_JOINTS];
+            m.joint_velocities = [0.0; MAX_JOINTS];
+            m.joint_angles[..NUM_JOINTS].copy_from_slice(&s.joint_pos);
+            m.joint_velocities[..NUM_JOINTS].copy_from_slice(&s.joint_vel);
+            m.body_positions = [[0.0; 3]; MAX_BODIES];
+            m.body_positions[..NUM_BODIES].copy_from_slice(&s.body_pos);
+            m.body_contacts = s
+                .contact
+                .iter()
+                .enumerate()
+                .fold(0u32, |acc, (b, &c)| acc | ((c as u32) << b));
+            let ground = self.scene.height_at(s.head[0], s.head[1]);
+            m.fallen = detect_fall(s, Posture::Crawl, ground).is_some() as u32;
+        }
+        let scene_obstacles = self.backend.obstacles();
+        let mut n = 0;
+        for o in scene_obstacles {
+            if n == MAX_OBSTACLES {
+                break;
+            }
+            out.obstacles[n] = ObstacleSample {
+                position: o.position,
+                velocity: o.velocity,
+            };
+            n += 1;
+        }
+        for e in external {
+            if n == MAX_OBSTACLES {
+                break;
+            }
+            out.obstacles[n] = *e;
+            n += 1;
+        }
+        out.obstacle_count = n as u32;
+        Ok(())
+    }
+
+    fn reset_in_place(&mut self, agent: usize) -> Result<(), PhysicsError> {
+        let s = self.backend.humanoid_state(agent)?;
+        let (x, y, yaw) = (s.root_position[0], s.root_position[1], s.heading());
+        let yaw = if yaw.is_finite() { yaw } else { 0.0 };
+        self.backend.reset_humanoid(
+            agent,
+            &HumanoidPose::standing_on(&self.scene.terrain, x, y, yaw),
+        )
+    }
+
+    fn apply(&mut self, agent: usize, a: &AgentAction) -> Result<(), ComponentError> {
+        if a.joint_count == 0 {
+            return self.reset_in_place(agent).map_err(failed);
+        }
+        if a.joint_count as usize != NUM_JOINTS {
+            return Err(ComponentError::InvalidInput {
+                component: Self::NAME,
+                field: "actions.joint_count",
+                reason: format!(
+                    "agent {agent}: {} joint targets, expected {NUM_JOINTS} (or 0 = reset)",
+                    a.joint_count
+                ),
+            });
+        }
+        let w = a.root_wrench;
+        let wrench = (w != [0.0; 6]).then_some(RootWrench {
+            force: [w[0], w[1], w[2]],
+            torque: [w[3], w[4], w[5]],
+        });
+        self.backend
+            .set_action_for(agent, &a.pd_targets[..NUM_JOINTS], wrench)
+            .map_err(|e| ComponentError::InvalidInput {
+                component: Self::NAME,
+                field: "actions",
+                reason: format!("agent {agent}: {e}"),
+            })
+    }
+}
+
+impl Component for PhysicsComponent {
+    type Input = PhysicsInput;
+    type Output = PhysicsOutput;
+    const NAME: &'static str = "physics";
+
+    fn step(
+        &mut self,
+        tick: Tick,
+        input: &PhysicsInput,
+        output: &mut PhysicsOutput,
+    ) -> Result<Outcome, ComponentError> {
+        let expected = self.backend.tick().0;
+        for got in [tick.0, input.tick] {
+            if got != expected {
+                return Err(ComponentError::WrongTick {
+                    component: Self::NAME,
+                    expected,
+                    got,
+                });
+            }
+        }
+        let external_count = (input.external_count as usize).min(MAX_OBSTACLES);
+        let external = &input.external_obstacles[..external_count];
+        if input.agent_count == 0 {
+            self.observe(external, output).map_err(failed)?;
+            return Ok(Outcome::Continue);
+        }
+        if input.agent_count as usize != self.agents {
+            return Err(ComponentError::InvalidInput {
+                component: Self::NAME,
+                field: "agent_count",
+                reason: format!(
+                    "{} actions for a world of {} humanoids",
+                    input.agent_count, self.agents
+                ),
+            });
+        }
+        for (i, a) in input.actions[..self.agents].iter().enumerate() {
+            self.apply(i, a)?;
+        }
+        self.backend
+            .step_n(PHYSICS_STEPS_PER_CONTROL as usize)
+            .map_err(failed)?;
+        self.observe(external, output).map_err(failed)?;
+        Ok(Outcome::Continue)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plamo_scenes::HeightGrid;
+
+    fn flat() -> Scene {
+        Scene {
+            name: "flat".into(),
+            description: String::new(),
+            terrain: HeightGrid::flat([-3.0, -3.0], [6.0, 6.0], 0.1, 0.0),
+            walls: vec![],
+            dynamic: vec![],
+            tops: vec![],
+            landmarks: vec![],
+        }
+    }
+
+    fn world(n: usize) -> PhysicsComponent {
+        let places: Vec<Placement> = (0..n)
+            .map(|i| Placement {
+                x: 0.0,
+                y: i as f64,
+                yaw: 0.0,
+            })
+            .collect();
+        PhysicsComponent::new(
+            BackendKind::Rapier,
+            &flat(),
+            &PhysicsSettings::default(),
+            &places,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn observe_then_step_four_ticks_and_reject_wrong_ticks() {
+        let mut p = world(2);
+        let mut out = PhysicsOutput::default();
+        p.step(Tick(0), &PhysicsInput::default(), &mut out).unwrap();
+        assert_eq!((out.tick, out.agent_count), (0, 2));
+        assert!(out.agents[1].head_position[2] > 1.3);
+        assert_eq!(out.agents[1].root_position[1], 1.0);
+        let mut input = PhysicsInput {
+            tick: 0,
+            agent_count: 2,
+            ..Default::default()
+        };
+        for (i, a) in input.actions.iter_mut().take(2).enumerate() {
+            a.agent = i as u32;
+            a.joint_count = NUM_JOINTS as u32;
+        }
+        p.step(Tick(0), &input, &mut out).unwrap();
+        assert_eq!(out.tick, 4);
+        let err = p.step(Tick(0), &input, &mut out).unwrap_err();
+        assert_eq!(
+            err,
+            ComponentError::WrongTick {
+                component: "physics",
+                expected: 4,
+                got: 0
+            }
+        );
+        input.tick = 4;
+        input.actions[1].joint_count = 3;
+        assert!(matches!(
+            p.step(Tick(4), &input, &mut out),
+            Err(ComponentError::InvalidInput { .. })
+        ));
+        input.actions[1] = reset_request(4, 1);
+        p.step(Tick(4), &input, &mut out).unwrap();
+        assert_eq!(out.tick, 8);
+    }
+}

@@ -1,0 +1,242 @@
+//! The lockstep scheduler (DESIGN "Lockstep"): one control step at tick 4c is
+//!
+//! 1. read the physics state at 4c ([`sense`]: falls and metrics),
+//! 2. every agent's planner ([`plan`]),
+//! 3. every agent's controller ([`control`]),
+//! 4. physics, four steps of 1/120 s ([`actuate`]).
+//!
+//! The components are reached through [`Link`]s, the same way whether they run in
+//! this process or in others. Nothing here reads a clock to decide anything: the
+//! wall-clock timings it keeps are reported, never used.
+
+mod actuate;
+mod control;
+mod digest;
+mod error;
+mod link;
+mod plan;
+mod sense;
+
+use std::time::{Duration, Instant};
+
+use plamo_controller::ControllerSettings;
+use plamo_interfaces::{
+    AgentAction, ControllerInput, PHYSICS_STEPS_PER_CONTROL, PhysicsInput, PhysicsOutput,
+    PlanMessage, Tick,
+};
+use plamo_scenes::Scene;
+
+pub use digest::Digest;
+pub use error::RunError;
+pub use link::{InProcess, Link};
+pub use sense::InstructionReport;
+
+use sense::AgentTracker;
+
+/// The component instances of one run.
+pub struct Links {
+    /// The physics world.
+    pub physics: Box<dyn Link<PhysicsInput, PhysicsOutput>>,
+    /// One planner per agent, in agent order.
+    pub planners: Vec<Box<dyn Link<PhysicsOutput, PlanMessage>>>,
+    /// One controller per agent, in agent order.
+    pub controllers: Vec<Box<dyn Link<ControllerInput, AgentAction>>>,
+}
+
+/// Whether the run goes on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepStatus {
+    /// More to do.
+    Running,
+    /// Every agent finished every instruction.
+    Finished,
+    /// The simulated-time limit was reached first.
+    TimedOut,
+}
+
+/// Wall-clock durations of every call, per component kind \[s\] (reporting only).
+#[derive(Debug, Clone, Default)]
+pub struct CallTimes {
+    /// Physics calls.
+    pub physics: Vec<f64>,
+    /// Planner calls (all agents of one tick together).
+    pub planners: Vec<f64>,
+    /// Controller calls (all agents of one tick together).
+    pub controllers: Vec<f64>,
+    /// Whole control steps.
+    pub steps: Vec<f64>,
+}
+
+/// The orchestrator's loop over [`Links`].
+pub struct Lockstep {
+    links: Links,
+    scene: Scene,
+    world: PhysicsOutput,
+    plans: Vec<PlanMessage>,
+    input: PhysicsInput,
+    fallen: Vec<bool>,
+    trackers: Vec<AgentTracker>,
+    digest: Digest,
+    max_tick: u64,
+    times: CallTimes,
+}
+
+fn secs(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64()
+}
+
+impl Lockstep {
+    /// Read the world at tick 0 and get ready. `instruction_counts[k]` is agent k's
+    /// number of instructions; the run stops at `max_seconds` of simulated time.
+    pub fn start(
+        mut links: Links,
+        scene: Scene,
+        instruction_counts: &[usize],
+        controller: &ControllerSettings,
+        max_seconds: f64,
+    ) -> Result<Self, RunError> {
+        let agents = links.planners.len();
+        if agents == 0 || links.controllers.len() != agents || instruction_counts.len() != agents {
+            return Err(RunError::Setup(format!(
+                "{} planners, {} controllers and {} instruction lists: need one of each per agent",
+                agents,
+                links.controllers.len(),
+                instruction_counts.len()
+            )));
+        }
+        let world = links.physics.call(0, &PhysicsInput::default())?;
+        if world.tick != 0 || world.agent_count as usize != agents {
+            return Err(RunError::Setup(format!(
+                "physics reported tick {} with {} agents, expected tick 0 with {agents}",
+                world.tick, world.agent_count
+            )));
+        }
+        let mut digest = Digest::default();
+        digest.add(&world);
+        let per = PHYSICS_STEPS_PER_CONTROL as u64;
+        let max_tick = ((max_seconds * plamo_interfaces::PHYSICS_HZ as f64).ceil() as u64)
+            .div_ceil(per)
+            * per;
+        Ok(Self {
+            links,
+            scene,
+            world,
+            plans: vec![PlanMessage::default(); agents],
+            input: PhysicsInput::default(),
+            fallen: vec![false; agents],
+            trackers: instruction_counts
+                .iter()
+                .map(|&n| AgentTracker::new(n, controller.clone()))
+                .collect(),
+            digest,
+            max_tick,
+            times: CallTimes::default(),
+        })
+    }
+
+    /// One control step from the current tick (4c) to 4c + 4.
+    pub fn step(&mut self) -> Result<StepStatus, RunError> {
+        let tick = self.world.tick;
+        if tick >= self.max_tick {
+            return Ok(StepStatus::TimedOut);
+        }
+        let t0 = Instant::now();
+        plan::plan(&mut self.links.planners, tick, &self.world, &mut self.plans)?;
+        self.times.planners.push(secs(t0));
+        for (k, tracker) in self.trackers.iter_mut().enumerate() {
+            let fell = tracker.observe(
+                &self.scene,
+                Tick(tick),
+                &self.world.agents[k],
+                &self.plans[k],
+                &self.input.actions[k],
+            );
+            self.fallen[k] = fell;
+        }
+        if self.trackers.iter().all(AgentTracker::done) {
+            return Ok(StepStatus::Finished);
+        }
+        let t1 = Instant::now();
+        control::control(
+            &mut self.links.controllers,
+            tick,
+            &self.world,
+            &self.plans,
+            &self.fallen,
+            &mut self.input,
+        )?;
+        self.times.controllers.push(secs(t1));
+        let t2 = Instant::now();
+        self.world = actuate::actuate(self.links.physics.as_mut(), &self.input)?;
+        self.times.physics.push(secs(t2));
+        self.times.steps.push(secs(t0));
+        self.digest.add(&self.world);
+        Ok(StepStatus::Running)
+    }
+
+    /// The world as physics last reported it.
+    pub fn world(&self) -> &PhysicsOutput {
+        &self.world
+    }
+    /// Each agent's plan from the last control step.
+    pub fn plans(&self) -> &[PlanMessage] {
+        &self.plans
+    }
+    /// The actions applied during the last control period.
+    pub fn input(&self) -> &PhysicsInput {
+        &self.input
+    }
+    /// Which agents were found fallen at the last control step (and reset).
+    pub fn fallen(&self) -> &[bool] {
+        &self.fallen
+    }
+    /// The current tick.
+    pub fn tick(&self) -> Tick {
+        Tick(self.world.tick)
+    }
+    /// The fingerprint of every world state so far.
+    pub fn digest(&self) -> Digest {
+        self.digest
+    }
+    /// Wall-clock call durations so far.
+    pub fn times(&self) -> &CallTimes {
+        &self.times
+    }
+    /// The current instruction of agent `k` (equals its count when done).
+    pub fn instruction(&self, k: usize) -> usize {
+        self.plans.get(k).map_or(0, |p| p.instruction as usize)
+    }
+    /// Per-agent, per-instruction outcomes so far.
+    pub fn report(&self) -> Vec<Vec<InstructionReport>> {
+        let t = self.tick().seconds();
+        self.trackers.iter().map(|tr| tr.report(t)).collect()
+    }
+    /// Give the links back (to shut remote components down).
+    pub fn into_links(self) -> Links {
+        self.links
+    }
+}
+
+/// Median and 99th percentile of `v` \[same unit\]; zeros when empty.
+pub fn median_p99(v: &[f64]) -> (f64, f64) {
+    if v.is_empty() {
+        return (0.0, 0.0);
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let at = |q: f64| s[((s.len() - 1) as f64 * q).round() as usize];
+    (at(0.5), at(0.99))
+}
+
+/// Sleep until simulated time `tick` is due on a wall clock started at `start`,
+/// `speed` times faster than real time. Returns whether the tick was already late.
+pub fn pace(start: Instant, tick: Tick, speed: f64) -> bool {
+    let due = Duration::from_secs_f64(tick.seconds() / speed);
+    match due.checked_sub(start.elapsed()) {
+        Some(wait) => {
+            std::thread::sleep(wait);
+            false
+        }
+        None => true,
+    }
+}

@@ -1,0 +1,196 @@
+//! Phase 1 and the evaluation: read the physics state at tick 4c, decide which
+//! humanoids have fallen (for the posture their plan asks for), and feed each agent's
+//! per-instruction metrics (r_tau, XY/Z error, falls, residual wrench).
+//!
+//! Everything here is computed from the interface messages only, so in-process and
+//! multi-process runs evaluate identically.
+
+use std::collections::VecDeque;
+
+use plamo_controller::{
+    ControllerSettings, MetricsAccumulator, MetricsSummary, PathRewardWeights, RootWrench,
+    StepSample,
+};
+use plamo_interfaces::{
+    AgentAction, CONTROL_HZ, HumanoidState, PLAN_WAYPOINT_DT, PlanMessage, Tick,
+};
+use plamo_physics::HEAD;
+use plamo_planner::FLAG_FINISHED;
+use plamo_scenes::Scene;
+use serde::Serialize;
+
+/// Control steps between two plan waypoints (0.5 s at 30 Hz).
+const STEPS_PER_WAYPOINT: usize = (PLAN_WAYPOINT_DT * CONTROL_HZ as f64) as usize;
+
+/// One instruction's outcome for one agent.
+#[derive(Debug, Clone, Serialize)]
+pub struct InstructionReport {
+    /// The instruction's index.
+    pub index: usize,
+    /// Reached its target without falling on the way.
+    pub success: bool,
+    /// Its target was reached (possibly after falls).
+    pub reached: bool,
+    /// Simulated time from the instruction becoming current to its target being
+    /// reached, or to the end of the run \[s\].
+    pub time_s: f64,
+    /// Tracking metrics over the instruction (falls, XY/Z error, r_tau, residual).
+    pub metrics: MetricsSummary,
+}
+
+/// Tracks one agent: its current instruction, its metrics, and the plan's head
+/// position for "now" (the plan issued 0.5 s earlier put its first waypoint here).
+pub(crate) struct AgentTracker {
+    settings: ControllerSettings,
+    instructions: Vec<Track>,
+    current: usize,
+    /// Head targets the plan set for the coming steps: front = now.
+    first_waypoints: VecDeque<[f64; 3]>,
+    start_head: Option<[f64; 3]>,
+    steps: usize,
+    done: bool,
+}
+
+struct Track {
+    acc: MetricsAccumulator,
+    start_t: f64,
+    reached_t: Option<f64>,
+}
+
+fn residual(a: &AgentAction) -> Option<RootWrench> {
+    let w = a.root_wrench;
+    (w != [0.0; 6]).then_some(RootWrench {
+        force: [w[0], w[1], w[2]],
+        torque: [w[3], w[4], w[5]],
+    })
+}
+
+fn heading(q: [f64; 4]) -> f64 {
+    // Message quaternion (x, y, z, w): yaw of the rotated +X axis.
+    let [x, y, z, w] = q;
+    let fx = 1.0 - 2.0 * (y * y + z * z);
+    let fy = 2.0 * (x * y + w * z);
+    fy.atan2(fx)
+}
+
+impl AgentTracker {
+    pub(crate) fn new(instructions: usize, settings: ControllerSettings) -> Self {
+        Self {
+            instructions: (0..instructions)
+                .map(|_| Track {
+                    acc: MetricsAccumulator::new(
+                        PathRewardWeights::default(),
+                        settings.body_weight(),
+                        vec![],
+                    ),
+                    start_t: 0.0,
+                    reached_t: None,
+                })
+                .collect(),
+            settings,
+            current: 0,
+            first_waypoints: VecDeque::with_capacity(STEPS_PER_WAYPOINT + 1),
+            start_head: None,
+            steps: 0,
+            done: false,
+        }
+    }
+
+    /// Whether the agent finished every instruction.
+    pub(crate) fn done(&self) -> bool {
+        self.done
+    }
+
+    /// Whether the humanoid has fallen for the posture `plan` asks for.
+    pub(crate) fn is_fallen(&self, scene: &Scene, s: &HumanoidState, plan: &PlanMessage) -> bool {
+        let h = s.head_position;
+        let above = h[2] - scene.height_at(h[0], h[1]);
+        self.settings.is_fallen(above, plan.form_height) || !above.is_finite()
+    }
+
+    /// Record the step at `tick` with this tick's plan and the action applied during
+    /// the previous control period. Returns whether the humanoid is fallen.
+    pub(crate) fn observe(
+        &mut self,
+        scene: &Scene,
+        tick: Tick,
+        s: &HumanoidState,
+        plan: &PlanMessage,
+        last_action: &AgentAction,
+    ) -> bool {
+        let t = tick.seconds();
+        let fallen = self.is_fallen(scene, s, plan);
+        if self.done {
+            return fallen;
+        }
+        let head = s.head_position;
+        let start = *self.start_head.get_or_insert(head);
+        // Instruction switches: the planner moved on because the target was reached.
+        let reached_up_to = (plan.instruction as usize).min(self.instructions.len());
+        while self.current < reached_up_to {
+            self.instructions[self.current].reached_t = Some(t);
+            self.current += 1;
+            if let Some(next) = self.instructions.get_mut(self.current) {
+                next.start_t = t;
+            }
+        }
+        if plan.flags & FLAG_FINISHED != 0 || self.current >= self.instructions.len() {
+            self.done = true;
+            return fallen;
+        }
+        let w0 = plan.waypoints[0].position;
+        self.first_waypoints.push_back(w0);
+        let target = if self.steps < STEPS_PER_WAYPOINT {
+            // Before the first plan's first waypoint is due: along the line to it.
+            let first = self.first_waypoints[0];
+            let f = self.steps as f64 / STEPS_PER_WAYPOINT as f64;
+            std::array::from_fn(|i| start[i] + (first[i] - start[i]) * f)
+        } else {
+            self.first_waypoints.pop_front().unwrap_or(w0)
+        };
+        self.steps += 1;
+        let yaw = heading(s.root_orientation);
+        let max_other = s.body_positions[..(s.body_count as usize).min(s.body_positions.len())]
+            .iter()
+            .enumerate()
+            .filter(|(b, _)| *b != HEAD)
+            .map(|(_, p)| p[2])
+            .fold(f64::NEG_INFINITY, f64::max);
+        let sample = StepSample {
+            t,
+            head,
+            target,
+            head_dir: [yaw.cos(), yaw.sin(), 0.0],
+            path_dir: [w0[0] - target[0], w0[1] - target[1], 0.0],
+            max_other_body_z: max_other,
+            fallen,
+            residual: residual(last_action),
+        };
+        self.instructions[self.current].acc.push(&sample);
+        fallen
+    }
+
+    /// The per-instruction outcomes at simulated time `end_t` \[s\].
+    pub(crate) fn report(&self, end_t: f64) -> Vec<InstructionReport> {
+        self.instructions
+            .iter()
+            .enumerate()
+            .map(|(index, tr)| {
+                let metrics = tr.acc.summary();
+                let reached = tr.reached_t.is_some();
+                let started = index <= self.current;
+                InstructionReport {
+                    index,
+                    success: reached && metrics.falls == 0,
+                    reached,
+                    time_s: if started {
+                        tr.reached_t.unwrap_or(end_t) - tr.start_t
+                    } else {
+                        0.0
+                    },
+                    metrics,
+                }
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,243 @@
+//! Multi-process runs: the orchestrator spawns one `plamo component ...` process per
+//! component instance, talks to each through an iceoryx2 [`RemoteComponent`], and
+//! cleans up whatever happens: a component that dies is noticed within a wait slice
+//! (its process exited, or its node is listed dead), the others are told to stop,
+//! stragglers are killed, and the run's shared-memory files are removed.
+
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use iceoryx2::prelude::*;
+use plamo_interfaces::{ComponentKind, RunId, ServiceNames};
+
+use crate::ipc::{
+    IpcError, IpcSettings, RemoteComponent, dead_nodes, end_run, remove_stale_resources,
+    run_config,
+};
+use crate::lockstep::{Link, Links, RunError};
+use crate::spec::RunSpec;
+
+/// The orchestrator's iceoryx2 node name (components exit when it is gone).
+pub const ORCHESTRATOR_NODE: &str = crate::ipc::ORCHESTRATOR_NODE;
+
+/// How long stopped components get to exit before they are killed.
+const EXIT_GRACE: Duration = Duration::from_secs(2);
+
+/// The iceoryx2 node name of a component instance.
+pub fn node_name(kind: ComponentKind, agent: u32) -> String {
+    match kind {
+        ComponentKind::Physics => "plamo-physics".to_string(),
+        _ => format!("plamo-{kind}-{agent}"),
+    }
+}
+
+/// The component processes of one run and the orchestrator's side of their links.
+pub struct ProcessRun {
+    cfg: Config,
+    node: Option<Node<ipc::Service>>,
+    children: Vec<(String, Arc<Mutex<Option<Child>>>)>,
+}
+
+type Slot = Arc<Mutex<Option<Child>>>;
+
+fn ipc_setup(what: &str) -> impl FnOnce(IpcError) -> RunError + '_ {
+    move |e| RunError::Setup(format!("{what}: {e}"))
+}
+
+impl ProcessRun {
+    /// Start every component of `spec` as a child process of `exe` under run `run`,
+    /// and wait until each has said it is ready. `physics_fault` is passed to the
+    /// physics process as `--fault` (reliability tests only).
+    pub fn start(
+        spec: &RunSpec,
+        run: &RunId,
+        exe: &Path,
+        settings: IpcSettings,
+        physics_fault: Option<&str>,
+    ) -> Result<(Self, Links), RunError> {
+        let cfg = run_config(run)?;
+        // A crashed earlier run with this id may have left files behind.
+        remove_stale_resources(&cfg);
+        let node = NodeBuilder::new()
+            .name(&NodeName::new(ORCHESTRATOR_NODE).map_err(|e| RunError::Setup(format!("{e:?}")))?)
+            .config(&cfg)
+            .signal_handling_mode(SignalHandlingMode::Disabled)
+            .create::<ipc::Service>()
+            .map_err(|e| RunError::Setup(format!("orchestrator node: {e:?}")))?;
+        let mut this = Self {
+            cfg,
+            node: None,
+            children: Vec::new(),
+        };
+        let result = this.spawn_all(&node, spec, run, exe, settings, physics_fault);
+        this.node = Some(node);
+        match result {
+            Ok(links) => Ok((this, links)),
+            Err(e) => {
+                this.finish(None);
+                Err(e)
+            }
+        }
+    }
+
+    fn open<I, O>(
+        &mut self,
+        node: &Node<ipc::Service>,
+        run: &RunId,
+        kind: ComponentKind,
+        agent: u32,
+        settings: IpcSettings,
+    ) -> Result<(RemoteComponent<I, O>, Slot), RunError>
+    where
+        I: ZeroCopySend + Copy + std::fmt::Debug + Default + 'static,
+        O: ZeroCopySend + Copy + std::fmt::Debug + Default + 'static,
+    {
+        let label = match kind {
+            ComponentKind::Physics => "physics".to_string(),
+            _ => format!("{kind}-{agent}"),
+        };
+        let slot: Slot = Arc::new(Mutex::new(None));
+        let watched = slot.clone();
+        let cfg = self.cfg.clone();
+        let node_name = node_name(kind, agent);
+        let liveness = Box::new(move || {
+            if let Ok(mut guard) = watched.lock()
+                && let Some(child) = guard.as_mut()
+                && let Ok(Some(status)) = child.try_wait()
+            {
+                return Some(format!("its process (pid {}) exited: {status}", child.id()));
+            }
+            dead_nodes(&cfg)
+                .iter()
+                .any(|n| n.0 == node_name)
+                .then(|| format!("its node `{node_name}` is dead"))
+        });
+        let names = ServiceNames::new(run, kind, agent);
+        let remote = RemoteComponent::open(node, label.clone(), &names, settings, liveness)
+            .map_err(ipc_setup("opening a component link"))?;
+        self.children.push((label, slot.clone()));
+        Ok((remote, slot))
+    }
+
+    fn spawn_all(
+        &mut self,
+        node: &Node<ipc::Service>,
+        spec: &RunSpec,
+        run: &RunId,
+        exe: &Path,
+        settings: IpcSettings,
+        physics_fault: Option<&str>,
+    ) -> Result<Links, RunError> {
+        let spawn = |kind: ComponentKind, agent: u32, slot: &Slot| -> Result<(), RunError> {
+            let mut cmd = Command::new(exe);
+            cmd.arg("component")
+                .arg(kind.as_str())
+                .arg("--run")
+                .arg(run.as_str())
+                .arg("--agent")
+                .arg(agent.to_string())
+                .args(spec.to_args())
+                .args(
+                    physics_fault
+                        .filter(|_| kind == ComponentKind::Physics)
+                        .map(|f| ["--fault".to_string(), f.to_string()])
+                        .into_iter()
+                        .flatten(),
+                )
+                .stdin(Stdio::null())
+                .stdout(Stdio::null())
+                .stderr(Stdio::inherit());
+            let child = cmd.spawn().map_err(|e| {
+                RunError::Setup(format!("starting `{} component {kind}`: {e}", exe.display()))
+            })?;
+            *slot.lock().expect("child slot") = Some(child);
+            Ok(())
+        };
+        let (mut physics, slot) =
+            self.open(node, run, ComponentKind::Physics, 0, settings)?;
+        spawn(ComponentKind::Physics, 0, &slot)?;
+        let mut planners = Vec::new();
+        let mut controllers = Vec::new();
+        for k in 0..spec.agents() as u32 {
+            let (p, slot) = self.open(node, run, ComponentKind::Planner, k, settings)?;
+            spawn(ComponentKind::Planner, k, &slot)?;
+            planners.push(p);
+            let (c, slot) = self.open(node, run, ComponentKind::Controller, k, settings)?;
+            spawn(ComponentKind::Controller, k, &slot)?;
+            controllers.push(c);
+        }
+        physics.wait_ready()?;
+        for p in &mut planners {
+            p.wait_ready()?;
+        }
+        for c in &mut controllers {
+            c.wait_ready()?;
+        }
+        Ok(Links {
+            physics: Box::new(physics),
+            planners: planners
+                .into_iter()
+                .map(|p| Box::new(p) as Box<dyn Link<_, _>>)
+                .collect(),
+            controllers: controllers
+                .into_iter()
+                .map(|c| Box::new(c) as Box<dyn Link<_, _>>)
+                .collect(),
+        })
+    }
+
+    /// The run's iceoryx2 configuration.
+    pub fn config(&self) -> &Config {
+        &self.cfg
+    }
+
+    /// Process ids of the component processes, by instance name.
+    pub fn pids(&self) -> Vec<(String, u32)> {
+        self.children
+            .iter()
+            .filter_map(|(n, s)| s.lock().ok()?.as_ref().map(|c| (n.clone(), c.id())))
+            .collect()
+    }
+
+    /// Stop every component (politely, then by force), close the links, and remove
+    /// the run's files. Returns the instances that had to be killed.
+    pub fn finish(mut self, links: Option<Links>) -> Vec<String> {
+        if let Some(mut links) = links {
+            links.physics.shutdown();
+            for p in &mut links.planners {
+                p.shutdown();
+            }
+            for c in &mut links.controllers {
+                c.shutdown();
+            }
+            drop(links);
+        }
+        let deadline = Instant::now() + EXIT_GRACE;
+        let mut killed = Vec::new();
+        for (name, slot) in &self.children {
+            let Ok(mut guard) = slot.lock() else { continue };
+            let Some(child) = guard.as_mut() else { continue };
+            loop {
+                match child.try_wait() {
+                    Ok(Some(_)) => break,
+                    Ok(None) if Instant::now() < deadline => {
+                        std::thread::sleep(Duration::from_millis(10))
+                    }
+                    _ => {
+                        let _ = child.kill();
+                        let _ = child.wait();
+                        killed.push(name.clone());
+                        break;
+                    }
+                }
+            }
+        }
+        drop(self.node.take());
+        remove_stale_resources(&self.cfg);
+        // Every node of the run is gone now; the last file can go.
+        let _ = end_run(&self.cfg);
+        killed
+    }
+}

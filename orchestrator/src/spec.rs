@@ -1,0 +1,155 @@
+//! What a run is (scene, per-agent instructions, backend, seed) and how its
+//! components are built from it. The orchestrator and every component process build
+//! from the same [`RunSpec`], so they agree on the scene, the agents and their start.
+
+use plamo_controller::{ControllerComponent, ControllerSettings};
+use plamo_physics::{BackendKind, PhysicsComponent, PhysicsSettings, Placement};
+use plamo_planner::{Planner, PlannerComponent, PlannerSettings, Source, parse_instructions};
+use plamo_scenes::Scene;
+
+use crate::lockstep::{InProcess, Links, RunError};
+
+/// Largest start-heading perturbation drawn from the seed \[rad\].
+pub const SEED_YAW_JITTER: f64 = 0.05;
+
+/// Everything that decides a run's result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSpec {
+    /// Built-in scene name or scene file path.
+    pub scene: String,
+    /// One instruction text per agent (the agent count is its length).
+    pub instructions: Vec<String>,
+    /// Physics engine.
+    pub backend: BackendKind,
+    /// Seed of the start-heading perturbation.
+    pub seed: u64,
+}
+
+fn setup(e: impl std::fmt::Display) -> RunError {
+    RunError::Setup(e.to_string())
+}
+
+/// SplitMix64: a fixed, platform-independent mix of the seed.
+fn splitmix(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+impl RunSpec {
+    /// Number of agents.
+    pub fn agents(&self) -> usize {
+        self.instructions.len()
+    }
+
+    /// Load the scene.
+    pub fn load_scene(&self) -> Result<Scene, RunError> {
+        plamo_scenes::resolve(&self.scene).map_err(setup)
+    }
+
+    /// Where agent `k` starts: the centre of its first instruction's source landmark,
+    /// facing its first target, heading perturbed by the seed.
+    pub fn placement(&self, scene: &Scene, k: usize) -> Result<Placement, RunError> {
+        let parsed = parse_instructions(&self.instructions[k], scene).map_err(setup)?;
+        let first = parsed
+            .first()
+            .ok_or_else(|| RunError::Setup(format!("agent {k}: no instructions")))?;
+        let Source::Landmark(name) = &first.source else {
+            return Err(RunError::Setup(format!(
+                "agent {k}: the first instruction `{}` must say where it starts (\"from the <landmark>\")",
+                first.text
+            )));
+        };
+        let at = |n: &str| {
+            scene
+                .landmark(n)
+                .map(|l| l.region.center())
+                .ok_or_else(|| RunError::Setup(format!("no landmark `{n}`")))
+        };
+        let [x, y] = at(name)?;
+        let [tx, ty] = at(&first.target)?;
+        let r = splitmix(self.seed ^ splitmix(k as u64));
+        let unit = (r >> 11) as f64 / (1u64 << 53) as f64;
+        let yaw = (ty - y).atan2(tx - x) + (2.0 * unit - 1.0) * SEED_YAW_JITTER;
+        Ok(Placement { x, y, yaw })
+    }
+
+    /// Agent `k`'s planner.
+    pub fn planner(&self, scene: &Scene, k: usize) -> Result<PlannerComponent, RunError> {
+        let p = self.placement(scene, k)?;
+        let planner = Planner::new(
+            scene.clone(),
+            &self.instructions[k],
+            [p.x, p.y],
+            PlannerSettings::default(),
+        )
+        .map_err(|e| RunError::Setup(format!("agent {k}: {e}")))?;
+        Ok(PlannerComponent::new(planner, k as u32))
+    }
+
+    /// Agent `k`'s controller (default model-based policy).
+    pub fn controller(&self, scene: &Scene, k: usize) -> Result<ControllerComponent, RunError> {
+        ControllerComponent::new(k as u32, scene.clone(), ControllerSettings::default())
+            .map_err(setup)
+    }
+
+    /// The physics world with every agent at its start.
+    pub fn physics(&self, scene: &Scene) -> Result<PhysicsComponent, RunError> {
+        let placements = (0..self.agents())
+            .map(|k| self.placement(scene, k))
+            .collect::<Result<Vec<_>, _>>()?;
+        if !self.backend.is_available() {
+            return Err(RunError::Setup(format!(
+                "physics backend `{}` is not in this build: rebuild plamo with `--features mujoco` \
+                 (after scripts/install-mujoco.sh)",
+                self.backend
+            )));
+        }
+        PhysicsComponent::new(
+            self.backend,
+            scene,
+            &PhysicsSettings::default(),
+            &placements,
+        )
+        .map_err(setup)
+    }
+
+    /// Every component in this process.
+    pub fn in_process(&self, scene: &Scene) -> Result<Links, RunError> {
+        let mut planners: Vec<Box<dyn crate::lockstep::Link<_, _>>> = Vec::new();
+        let mut controllers: Vec<Box<dyn crate::lockstep::Link<_, _>>> = Vec::new();
+        for k in 0..self.agents() {
+            planners.push(Box::new(InProcess::new(
+                format!("planner-{k}"),
+                self.planner(scene, k)?,
+            )));
+            controllers.push(Box::new(InProcess::new(
+                format!("controller-{k}"),
+                self.controller(scene, k)?,
+            )));
+        }
+        Ok(Links {
+            physics: Box::new(InProcess::new("physics", self.physics(scene)?)),
+            planners,
+            controllers,
+        })
+    }
+
+    /// The command-line arguments that give a component process this spec.
+    pub fn to_args(&self) -> Vec<String> {
+        let mut a = vec![
+            "--scene".to_string(),
+            self.scene.clone(),
+            "--physics".into(),
+            self.backend.to_string(),
+            "--seed".into(),
+            self.seed.to_string(),
+        ];
+        for i in &self.instructions {
+            a.push("--instructions".into());
+            a.push(i.clone());
+        }
+        a
+    }
+}
