@@ -1,0 +1,333 @@
+//! `plamo run` end to end, through the built binary: determinism in-process vs
+//! multi-process, a SIGKILLed or crashing component, a wrong tick, a killed
+//! orchestrator, two concurrent runs, and no shared-memory files left behind.
+//! Runs are a few simulated seconds long.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_plamo");
+const ROUTE: &str = "Run from the tree to the car, then crawl to the bench";
+
+fn plamo(args: &[&str]) -> Command {
+    let mut c = Command::new(BIN);
+    c.arg("run")
+        .args(["--scene", "playground", "--quiet"])
+        .args(args);
+    c
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("plamo-run-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn run_ok(args: &[&str], out: &Path) -> Output {
+    let o = plamo(args)
+        .args(["--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("trajectory digest"), "{text}\n{}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+fn digest(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .find_map(|l| l.strip_prefix("trajectory digest ").map(str::to_string))
+        .expect("digest line")
+}
+
+/// Files of run `run` left in iceoryx2's shared-memory and runtime directories.
+fn leftovers(run: &str) -> Vec<String> {
+    let prefix = format!("plamo-{run}-");
+    let mut found = Vec::new();
+    let mut dirs = vec![PathBuf::from("/dev/shm"), PathBuf::from("/tmp/iceoryx2")];
+    while let Some(dir) = dirs.pop() {
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let path = e.path();
+            if path.is_dir() {
+                dirs.push(path);
+            } else if e.file_name().to_string_lossy().starts_with(&prefix) {
+                found.push(path.display().to_string());
+            }
+        }
+    }
+    found
+}
+
+/// Pids of the component processes of run `run` (from /proc).
+fn component_pids(run: &str) -> Vec<(u32, String)> {
+    let mut v = Vec::new();
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<u32>() else {
+            continue;
+        };
+        let Ok(cmd) = std::fs::read(e.path().join("cmdline")) else {
+            continue;
+        };
+        let args: Vec<String> = cmd
+            .split(|b| *b == 0)
+            .map(|a| String::from_utf8_lossy(a).into_owned())
+            .collect();
+        if args.get(1).is_some_and(|a| a == "component")
+            && args.windows(2).any(|w| w[0] == "--run" && w[1] == run)
+        {
+            v.push((pid, args.get(2).cloned().unwrap_or_default()));
+        }
+    }
+    v
+}
+
+fn wait_with_deadline(child: &mut Child, limit: Duration) -> Option<std::process::ExitStatus> {
+    let start = Instant::now();
+    while start.elapsed() < limit {
+        if let Some(s) = child.try_wait().unwrap() {
+            return Some(s);
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    None
+}
+
+fn sigkill(pid: u32) {
+    assert!(
+        Command::new("kill")
+            .args(["-9", &pid.to_string()])
+            .status()
+            .unwrap()
+            .success()
+    );
+}
+
+#[test]
+fn in_process_and_multi_process_runs_are_bit_identical() {
+    let a = out_dir("inproc");
+    let b = out_dir("multi");
+    let args = ["--instructions", ROUTE, "--max-seconds", "3", "--seed", "7"];
+    let oa = run_ok(&args, &a);
+    let mut margs = args.to_vec();
+    margs.extend(["--processes", "--run", "cli-test-det"]);
+    let ob = run_ok(&margs, &b);
+    assert_eq!(digest(&oa), digest(&ob));
+    for f in ["trajectory.csv", "obstacles.csv", "metrics.json"] {
+        assert_eq!(
+            std::fs::read(a.join(f)).unwrap(),
+            std::fs::read(b.join(f)).unwrap(),
+            "{f} differs"
+        );
+    }
+    assert!(a.join("run.png").exists() && a.join("plans.json").exists());
+    assert_eq!(leftovers("cli-test-det"), Vec::<String>::new());
+    // Another seed changes the start heading, so the trajectory.
+    let c = out_dir("seed");
+    let oc = run_ok(&["--instructions", ROUTE, "--max-seconds", "3", "--seed", "8"], &c);
+    assert_ne!(digest(&oa), digest(&oc));
+}
+
+#[test]
+fn two_agents_with_their_own_instructions_run_in_both_modes() {
+    let a = out_dir("two-in");
+    let b = out_dir("two-multi");
+    let args = [
+        "--agents",
+        "2",
+        "--instructions",
+        ROUTE,
+        "--instructions",
+        "walk from the car to the bench",
+        "--max-seconds",
+        "2",
+    ];
+    let oa = run_ok(&args, &a);
+    let mut margs = args.to_vec();
+    margs.extend(["--processes", "--run", "cli-test-two"]);
+    let ob = run_ok(&margs, &b);
+    assert_eq!(digest(&oa), digest(&ob));
+    let traj = std::fs::read_to_string(a.join("trajectory.csv")).unwrap();
+    assert!(traj.lines().any(|l| l.starts_with("0,1,")), "agent 1 recorded");
+    let text = String::from_utf8_lossy(&oa.stdout);
+    assert!(text.contains("agent 1"), "{text}");
+    assert_eq!(leftovers("cli-test-two"), Vec::<String>::new());
+}
+
+#[test]
+fn a_sigkilled_component_stops_the_run_and_leaves_no_files() {
+    let run = "cli-test-kill";
+    let mut orch = plamo(&[
+        "--instructions",
+        ROUTE,
+        "--max-seconds",
+        "600",
+        "--processes",
+        "--run",
+        run,
+    ])
+    .stdout(Stdio::null())
+    .stderr(Stdio::piped())
+    .spawn()
+    .unwrap();
+    // Wait until the components are up and the run has gone on for a while.
+    let start = Instant::now();
+    let physics = loop {
+        if let Some((pid, _)) = component_pids(run).into_iter().find(|(_, k)| k == "physics") {
+            break pid;
+        }
+        assert!(start.elapsed() < Duration::from_secs(60), "no physics process");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    std::thread::sleep(Duration::from_millis(1500));
+    let killed_at = Instant::now();
+    sigkill(physics);
+    let status = wait_with_deadline(&mut orch, Duration::from_secs(30)).expect("orchestrator hangs");
+    let took = killed_at.elapsed();
+    let mut err = String::new();
+    std::io::Read::read_to_string(orch.stderr.as_mut().unwrap(), &mut err).unwrap();
+    eprintln!("orchestrator exited {took:?} after the kill: {err}");
+    assert!(!status.success());
+    assert!(err.contains("physics") && err.contains("died"), "{err}");
+    assert!(err.contains("tick"), "{err}");
+    assert_eq!(component_pids(run), vec![], "components left running");
+    assert_eq!(leftovers(run), Vec::<String>::new());
+}
+
+#[test]
+fn a_crashing_component_is_named_with_its_tick() {
+    let run = "cli-test-crash";
+    let o = plamo(&[
+        "--instructions",
+        ROUTE,
+        "--max-seconds",
+        "3",
+        "--processes",
+        "--run",
+        run,
+        "--inject-fault",
+        "crash@40",
+    ])
+    .output()
+    .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains("physics died") && err.contains("tick 40"), "{err}");
+    assert_eq!(leftovers(run), Vec::<String>::new());
+}
+
+#[test]
+fn a_wrong_tick_is_an_error() {
+    let run = "cli-test-tick";
+    let o = plamo(&[
+        "--instructions",
+        ROUTE,
+        "--max-seconds",
+        "3",
+        "--processes",
+        "--run",
+        run,
+        "--inject-fault",
+        "wrong-tick@8",
+    ])
+    .output()
+    .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("physics: expected a message for tick 12, got tick 16"),
+        "{err}"
+    );
+    assert_eq!(component_pids(run), vec![]);
+    assert_eq!(leftovers(run), Vec::<String>::new());
+}
+
+#[test]
+fn components_exit_when_the_orchestrator_is_killed() {
+    let run = "cli-test-orphan";
+    let mut orch = plamo(&[
+        "--instructions",
+        ROUTE,
+        "--max-seconds",
+        "600",
+        "--processes",
+        "--run",
+        run,
+    ])
+    .stdout(Stdio::null())
+    .stderr(Stdio::null())
+    .spawn()
+    .unwrap();
+    let start = Instant::now();
+    while component_pids(run).len() < 3 {
+        assert!(start.elapsed() < Duration::from_secs(60), "components did not start");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    sigkill(orch.id());
+    orch.wait().unwrap();
+    let killed = Instant::now();
+    while !component_pids(run).is_empty() {
+        assert!(
+            killed.elapsed() < Duration::from_secs(30),
+            "components still running: {:?}",
+            component_pids(run)
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // A new run with the same id cleans whatever the killed orchestrator left.
+    let o = run_ok(
+        &["--instructions", ROUTE, "--max-seconds", "1", "--processes", "--run", run],
+        &out_dir("orphan-after"),
+    );
+    assert!(!digest(&o).is_empty());
+    assert_eq!(leftovers(run), Vec::<String>::new());
+}
+
+#[test]
+fn concurrent_runs_are_isolated() {
+    let spawn = |run: &str, seed: &str, out: &Path| {
+        plamo(&[
+            "--instructions",
+            ROUTE,
+            "--max-seconds",
+            "2",
+            "--seed",
+            seed,
+            "--processes",
+            "--run",
+            run,
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap()
+    };
+    let (da, db) = (out_dir("conc-a"), out_dir("conc-b"));
+    let a = spawn("cli-test-conc-a", "1", &da);
+    let b = spawn("cli-test-conc-b", "2", &db);
+    let oa = a.wait_with_output().unwrap();
+    let ob = b.wait_with_output().unwrap();
+    let ra = run_ok(&["--instructions", ROUTE, "--max-seconds", "2", "--seed", "1"], &out_dir("conc-ra"));
+    let rb = run_ok(&["--instructions", ROUTE, "--max-seconds", "2", "--seed", "2"], &out_dir("conc-rb"));
+    assert_eq!(digest(&oa), digest(&ra));
+    assert_eq!(digest(&ob), digest(&rb));
+    assert_ne!(digest(&oa), digest(&ob));
+    assert_eq!(leftovers("cli-test-conc-a"), Vec::<String>::new());
+    assert_eq!(leftovers("cli-test-conc-b"), Vec::<String>::new());
+}
+
+#[cfg(not(feature = "mujoco"))]
+#[test]
+fn mujoco_without_the_feature_names_the_feature() {
+    let o = plamo(&["--instructions", ROUTE, "--physics", "mujoco"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains("`mujoco` feature"), "{err}");
+}
