@@ -4,9 +4,11 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod component;
+mod eval;
 mod plan;
 mod run;
 mod scenes;
+mod tune;
 
 /// PlaMo: plan and move a physics-simulated humanoid through rich 3D scenes.
 #[derive(Debug, Parser)]
@@ -29,6 +31,11 @@ enum Command {
     /// Serve one component over iceoryx2 (started by `plamo run --processes`).
     #[command(hide = true)]
     Component(component::ComponentArgs),
+    /// Tune the model-based gait's parameters by CMA-ES over rollouts.
+    Tune(tune::TuneArgs),
+    /// Evaluate the controller (paper Table 2).
+    #[command(subcommand)]
+    Eval(eval::EvalCommand),
 }
 
 /// Run the parsed command; the exit code says whether it succeeded.
@@ -38,5 +45,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Plan(args) => plan::run(args),
         Command::Run(args) => run::run(args),
         Command::Component(args) => component::run(args),
+        Command::Tune(args) => tune::run(args),
+        Command::Eval(cmd) => eval::run(cmd),
     }
 }

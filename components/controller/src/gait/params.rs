@@ -207,8 +207,9 @@ mod tests {
         assert_eq!(w, p.walk);
         assert_eq!(p.blend(1.47, 5.0), p.run);
         assert_eq!(p.blend(0.5, 0.5), p.crouch);
-        let mid = p.blend(1.47, 2.0);
-        assert!(mid.step_time < p.walk.step_time && mid.step_time > p.run.step_time);
+        let mid = p.blend(1.47, 0.5 * (p.walk.speed + p.run.speed));
+        let (a, b) = (p.walk.step_time, p.run.step_time);
+        assert!(mid.step_time > a.min(b) && mid.step_time < a.max(b));
     }
 
     #[test]

@@ -1,0 +1,267 @@
+//! `plamo eval locomotion`: paper Table 2's protocol for the controller. For each
+//! terrain (flat, slope, rough, stairs) x form (crawl 0.4 m @ 1 m/s, crouch-walk 0.8 m
+//! @ 2 m/s, walk 1.47 m @ 2 m/s, run 1.47 m @ 4 m/s), straight paths with constant speed
+//! and head height along the terrain strip; prints mean XY/Z errors next to the
+//! paper's, fall rate and residual; writes markdown and a bar plot.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context;
+use clap::{Args, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use plamo_controller::{
+    ControllerSettings, GaitParams, MetricsSummary, ModelBasedController, StraightPath, flat_scene,
+    run_straight,
+};
+use plamo_physics::BackendKind;
+use plamo_scenes::Scene;
+use plotters::prelude::*;
+use rayon::prelude::*;
+
+/// `plamo eval ...` subcommands.
+#[derive(Debug, Subcommand)]
+pub enum EvalCommand {
+    /// Table 2: terrain x locomotion form tracking errors.
+    Locomotion(LocomotionArgs),
+}
+
+/// Arguments of `plamo eval locomotion`.
+#[derive(Debug, Args)]
+pub struct LocomotionArgs {
+    /// Physics engine: rapier or mujoco.
+    #[arg(long, default_value = "rapier")]
+    physics: String,
+    /// Runs per cell (start offsets differ).
+    #[arg(long, default_value_t = 4)]
+    runs: usize,
+    /// Longest simulated time per run [s].
+    #[arg(long, default_value_t = 10.0)]
+    duration: f64,
+    /// Gait parameter file (default: built in).
+    #[arg(long)]
+    params: Option<PathBuf>,
+    /// Output directory (created).
+    #[arg(long, default_value = "eval-locomotion")]
+    out: PathBuf,
+}
+
+const TERRAINS: [&str; 4] = ["flat", "slope", "rough", "stairs"];
+/// (name, head height m, speed m/s).
+const FORMS: [(&str, f64, f64); 4] = [
+    ("crawl", 0.4, 1.0),
+    ("crouch-walk", 0.8, 2.0),
+    ("walk", 1.47, 2.0),
+    ("run", 1.47, 4.0),
+];
+/// Paper Table 2, (XY, Z) per terrain row and form column [m].
+const PAPER: [[(f64, f64); 4]; 4] = [
+    [(0.20, 0.07), (0.20, 0.03), (0.24, 0.21), (0.52, 0.26)],
+    [(0.21, 0.09), (0.22, 0.03), (0.25, 0.21), (0.60, 0.27)],
+    [(0.25, 0.10), (0.25, 0.04), (0.29, 0.24), (0.79, 0.31)],
+    [(0.45, 0.13), (0.41, 0.07), (0.39, 0.27), (1.01, 0.35)],
+];
+/// Length of the straight stretch of the builtin terrain strips [m] (x 5 -> 35).
+const STRIP: f64 = 30.0;
+
+/// Mean results of one cell.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+struct Cell {
+    xy: f64,
+    z: f64,
+    falls_per_min: f64,
+    fallen_fraction: f64,
+    residual_mean: f64,
+    residual_peak: f64,
+}
+
+/// Runs `plamo eval`.
+pub fn run(cmd: EvalCommand) -> anyhow::Result<ExitCode> {
+    match cmd {
+        EvalCommand::Locomotion(a) => locomotion(a),
+    }
+}
+
+fn scene(terrain: &str) -> anyhow::Result<(Scene, [f64; 2])> {
+    if terrain == "flat" {
+        return Ok((flat_scene(60.0), [0.0, 0.0]));
+    }
+    let s = plamo_scenes::builtin(&format!("terrain-{terrain}"))?;
+    Ok((s, [5.0, 3.0]))
+}
+
+fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
+    let backend: BackendKind = a
+        .physics
+        .parse()
+        .map_err(|e| anyhow::anyhow!("--physics: {e}"))?;
+    let params = match &a.params {
+        Some(p) => GaitParams::load(p)?,
+        None => GaitParams::default(),
+    };
+    let settings = ControllerSettings {
+        body_mass: plamo_physics::humanoid::total_mass(),
+        ..Default::default()
+    };
+    let scenes: Vec<(Scene, [f64; 2])> = TERRAINS
+        .iter()
+        .map(|t| scene(t))
+        .collect::<anyhow::Result<_>>()?;
+    let jobs: Vec<(usize, usize, usize)> = (0..TERRAINS.len())
+        .flat_map(|t| (0..FORMS.len()).flat_map(move |f| (0..a.runs).map(move |r| (t, f, r))))
+        .collect();
+    let bar = ProgressBar::new(jobs.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} runs [{elapsed} < {eta}]")
+            .context("progress template")?,
+    );
+    let results: Vec<anyhow::Result<MetricsSummary>> = jobs
+        .par_iter()
+        .map(|&(t, f, r)| {
+            let (scene, start) = &scenes[t];
+            let (_, head, speed) = FORMS[f];
+            // Runs differ by where they start along the strip and sideways [m].
+            let path = StraightPath {
+                start: [
+                    start[0] + 0.37 * r as f64,
+                    start[1] + 0.1 * (r % 3) as f64 - 0.1,
+                ],
+                speed,
+                head_height: head,
+            };
+            let duration = a.duration.min((STRIP - 0.37 * r as f64) / speed);
+            let mut policy = ModelBasedController::with_params(params, settings.clone())?;
+            let m = run_straight(backend, scene, path, duration, &mut policy, &settings)?;
+            bar.inc(1);
+            Ok(m)
+        })
+        .collect();
+    bar.finish();
+    let mut cells = [[Cell::default(); 4]; 4];
+    for (&(t, f, _), m) in jobs.iter().zip(results) {
+        let m = m?;
+        let c = &mut cells[t][f];
+        let k = a.runs as f64;
+        c.xy += m.xy_err_mean / k;
+        c.z += m.z_err_mean / k;
+        c.falls_per_min += f64::from(m.falls) / m.duration_s.max(1e-9) * 60.0 / k;
+        c.fallen_fraction += m.fallen_fraction / k;
+        c.residual_mean += m.residual_force_mean / k;
+        c.residual_peak = c.residual_peak.max(m.residual_force_peak);
+    }
+    let md = markdown(&cells, &a);
+    println!("{md}");
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    std::fs::write(a.out.join("locomotion.md"), &md)?;
+    std::fs::write(
+        a.out.join("locomotion.json"),
+        serde_json::to_string_pretty(&cells)?,
+    )?;
+    plot(&cells, &a.out.join("locomotion.png"))?;
+    println!("wrote {}", a.out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+fn markdown(cells: &[[Cell; 4]; 4], a: &LocomotionArgs) -> String {
+    let mut s = format!(
+        "Command: `plamo eval locomotion --physics {} --runs {} --duration {}`\n\n\
+         Mean head XY-err / Z-err [m], ours (paper Table 2 in brackets).\n\n\
+         | terrain | crawl 0.4 m @ 1 | crouch-walk 0.8 m @ 2 | walk 1.47 m @ 2 | run 1.47 m @ 4 |\n|---|---|---|---|---|\n",
+        a.physics, a.runs, a.duration
+    );
+    for (t, row) in cells.iter().enumerate() {
+        s.push_str(&format!("| {} |", TERRAINS[t]));
+        for (f, c) in row.iter().enumerate() {
+            let (px, pz) = PAPER[t][f];
+            s.push_str(&format!(" {:.2} / {:.2} ({px:.2} / {pz:.2}) |", c.xy, c.z));
+        }
+        s.push('\n');
+    }
+    s.push_str(
+        "\nFalls per minute / fraction of steps fallen / residual force mean, peak [m*g]:\n\n\
+         | terrain | crawl | crouch-walk | walk | run |\n|---|---|---|---|---|\n",
+    );
+    for (t, row) in cells.iter().enumerate() {
+        s.push_str(&format!("| {} |", TERRAINS[t]));
+        for c in row {
+            s.push_str(&format!(
+                " {:.1} / {:.2} / {:.2}, {:.2} |",
+                c.falls_per_min, c.fallen_fraction, c.residual_mean, c.residual_peak
+            ));
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// Font family the plot asks for (the same embedded DejaVu Sans the other pictures use).
+const FAMILY: &str = "sans-serif";
+
+fn plot(cells: &[[Cell; 4]; 4], path: &std::path::Path) -> anyhow::Result<()> {
+    static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+    plotters::style::register_font(FAMILY, FontStyle::Normal, FONT)
+        .map_err(|_| anyhow::anyhow!("the embedded font could not be loaded"))?;
+    let root = BitMapBackend::new(path, (1000, 500)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let max = cells
+        .iter()
+        .flatten()
+        .map(|c| c.xy)
+        .chain(PAPER.iter().flatten().map(|p| p.0))
+        .fold(0.5_f64, f64::max)
+        * 1.1;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "Head XY error: ours (filled) vs paper (outline)",
+            (FAMILY, 20),
+        )
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(0.0..16.0, 0.0..max)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(0)
+        .y_desc("XY-err [m]")
+        .label_style((FAMILY, 14))
+        .draw()?;
+    let colors = [RED, BLUE, GREEN, MAGENTA];
+    for t in 0..4 {
+        for f in 0..4 {
+            let x0 = (t * 4 + f) as f64 + 0.1;
+            let c = colors[f];
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(x0, 0.0), (x0 + 0.4, cells[t][f].xy)],
+                c.filled(),
+            )))?;
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(x0 + 0.4, 0.0), (x0 + 0.8, PAPER[t][f].0)],
+                c.stroke_width(2),
+            )))?;
+        }
+        chart.draw_series(std::iter::once(Text::new(
+            TERRAINS[t].to_string(),
+            (t as f64 * 4.0 + 1.5, -max * 0.04),
+            (FAMILY, 15).into_font(),
+        )))?;
+    }
+    for (f, (name, _, _)) in FORMS.iter().enumerate() {
+        chart
+            .draw_series(std::iter::once(Rectangle::new(
+                [(0.0, 0.0), (0.0, 0.0)],
+                colors[f].filled(),
+            )))?
+            .label(*name)
+            .legend(move |(x, y)| {
+                Rectangle::new([(x, y - 5), (x + 10, y + 5)], colors[f].filled())
+            });
+    }
+    chart
+        .configure_series_labels()
+        .label_font((FAMILY, 14))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
