@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 mod component;
 mod eval;
+mod fmu;
 mod plan;
 mod run;
 mod scenes;
@@ -36,6 +37,9 @@ enum Command {
     /// Evaluate the controller (paper Table 2).
     #[command(subcommand)]
     Eval(eval::EvalCommand),
+    /// Build the FMI 2.0 co-simulation FMUs.
+    #[command(subcommand)]
+    Fmu(fmu::FmuCommand),
 }
 
 /// Run the parsed command; the exit code says whether it succeeded.
@@ -47,5 +51,6 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Component(args) => component::run(args),
         Command::Tune(args) => tune::run(args),
         Command::Eval(cmd) => eval::run(cmd),
+        Command::Fmu(cmd) => fmu::run(cmd),
     }
 }

@@ -1,0 +1,134 @@
+//! Packaging the FMU shared library into `.fmu` archives. The library describes
+//! itself (`plamo_fmu_model_description`), so each archive's `modelDescription.xml`
+//! is exactly what the binary implements.
+
+use std::ffi::{CStr, c_char};
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow, bail};
+
+/// File name of the FMU shared library cargo builds (crate `plamo-fmu`).
+pub const LIBRARY_FILE: &str = "libplamo_fmu.so";
+
+/// One written archive.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PackagedFmu {
+    /// Where the `.fmu` was written.
+    pub path: PathBuf,
+    /// `modelName` of its description.
+    pub model_name: String,
+    /// `guid` of its description.
+    pub guid: String,
+}
+
+/// Find the FMU library built alongside the running executable: binaries live in
+/// `target/<profile>/`, tests in `target/<profile>/deps/`.
+pub fn find_library() -> Result<PathBuf> {
+    let exe = std::env::current_exe().context("locating the running executable")?;
+    let mut dirs = Vec::new();
+    if let Some(dir) = exe.parent() {
+        dirs.push(dir.to_path_buf());
+        if let Some(up) = dir.parent() {
+            dirs.push(up.to_path_buf());
+        }
+    }
+    dirs.iter()
+        .map(|d| d.join(LIBRARY_FILE))
+        .find(|p| p.is_file())
+        .ok_or_else(|| {
+            anyhow!(
+                "{LIBRARY_FILE} not found next to {} (looked in {}); build it with `cargo build --release -p plamo-fmu` (or `cargo build -p plamo-fmu` for a debug plamo)",
+                exe.display(),
+                dirs.iter().map(|d| d.display().to_string()).collect::<Vec<_>>().join(", ")
+            )
+        })
+}
+
+/// The model descriptions the library reports, in order.
+pub fn model_descriptions(library: &Path) -> Result<Vec<String>> {
+    // SAFETY: loading our own cdylib runs no user initialisers beyond Rust's std, and
+    // the symbol has the signature declared in plamo-fmu's lib.rs.
+    let lib = unsafe { libloading::Library::new(library) }
+        .with_context(|| format!("loading {}", library.display()))?;
+    // SAFETY: as above; the returned pointers are NUL-terminated strings owned by the
+    // library, copied before it is unloaded.
+    unsafe {
+        let describe: libloading::Symbol<unsafe extern "C" fn(u32) -> *const c_char> =
+            lib.get(b"plamo_fmu_model_description\0").with_context(|| {
+                format!(
+                    "{} has no plamo_fmu_model_description: not a plamo FMU library",
+                    library.display()
+                )
+            })?;
+        let mut out = Vec::new();
+        for i in 0.. {
+            let p = describe(i);
+            if p.is_null() {
+                break;
+            }
+            out.push(CStr::from_ptr(p).to_string_lossy().into_owned());
+        }
+        Ok(out)
+    }
+}
+
+fn attribute(xml: &str, name: &str) -> Result<String> {
+    let key = format!(" {name}=\"");
+    let start = xml
+        .find(&key)
+        .ok_or_else(|| anyhow!("model description has no {name}"))?
+        + key.len();
+    let end = xml[start..]
+        .find('"')
+        .ok_or_else(|| anyhow!("unterminated {name}"))?;
+    Ok(xml[start..start + end].to_string())
+}
+
+/// Write one `.fmu` per model the library serves into `out_dir`, shipping the given
+/// files (e.g. scene TOML files) under `resources/`.
+pub fn package_all(
+    library: &Path,
+    out_dir: &Path,
+    resources: &[PathBuf],
+) -> Result<Vec<PackagedFmu>> {
+    let descriptions = model_descriptions(library)?;
+    if descriptions.is_empty() {
+        bail!("{} describes no model", library.display());
+    }
+    let binary =
+        std::fs::read(library).with_context(|| format!("reading {}", library.display()))?;
+    std::fs::create_dir_all(out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
+    let mut written = Vec::new();
+    for xml in descriptions {
+        let model_name = attribute(&xml, "modelName")?;
+        let identifier = attribute(&xml, "modelIdentifier")?;
+        let guid = attribute(&xml, "guid")?;
+        let path = out_dir.join(format!("{model_name}.fmu"));
+        let file = File::create(&path).with_context(|| format!("creating {}", path.display()))?;
+        let mut zip = zip::ZipWriter::new(file);
+        let opts = zip::write::SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Deflated);
+        zip.start_file("modelDescription.xml", opts)?;
+        zip.write_all(xml.as_bytes())?;
+        zip.start_file(format!("binaries/linux64/{identifier}.so"), opts)?;
+        zip.write_all(&binary)?;
+        for r in resources {
+            let name = r
+                .file_name()
+                .ok_or_else(|| anyhow!("resource {} has no file name", r.display()))?;
+            zip.start_file(format!("resources/{}", name.to_string_lossy()), opts)?;
+            zip.write_all(
+                &std::fs::read(r).with_context(|| format!("reading resource {}", r.display()))?,
+            )?;
+        }
+        zip.finish()?;
+        written.push(PackagedFmu {
+            path,
+            model_name,
+            guid,
+        });
+    }
+    Ok(written)
+}
