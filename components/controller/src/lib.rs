@@ -8,6 +8,7 @@
 //! root wrench), and records a [`StepSample`] into a [`MetricsAccumulator`].
 #![warn(missing_docs)]
 
+mod component;
 mod error;
 mod gait;
 mod math;
@@ -19,6 +20,7 @@ mod rollout;
 mod settings;
 mod tune;
 
+pub use component::{ControllerComponent, snapshot_from_message};
 pub use error::{ControllerError, Result};
 pub use gait::{
     DEFAULT_GAIT_PARAMS, FormParams, GAIT_PARAMS_VERSION, GaitParams, LegGeometry,
