@@ -22,3 +22,10 @@ cargo clippy --workspace --all-targets --all-features --locked -- -D warnings
 
 echo "== cargo test"
 cargo test --workspace --all-features --locked
+
+# FMPy is a real external FMI host: it imports the packaged FMUs as a user's tool would.
+echo "== FMU hosts: FMPy"
+python3 -m pip install --quiet --disable-pip-version-check "fmpy==0.3.32"
+cargo build --quiet --locked -p plamo-fmu
+cargo run --quiet --locked --all-features -- fmu build --out target/fmu-test
+python3 fmus/tests/fmpy_host.py target/fmu-test
