@@ -10,6 +10,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use plamo::viz::{FAMILY, ensure_registered};
 use plamo_controller::{
     ControllerSettings, GaitParams, MetricsSummary, ModelBasedController, StraightPath, flat_scene,
     run_straight,
@@ -194,13 +195,8 @@ fn markdown(cells: &[[Cell; 4]; 4], a: &LocomotionArgs) -> String {
     s
 }
 
-/// Font family the plot asks for (the same embedded DejaVu Sans the other pictures use).
-const FAMILY: &str = "sans-serif";
-
 fn plot(cells: &[[Cell; 4]; 4], path: &std::path::Path) -> anyhow::Result<()> {
-    static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
-    plotters::style::register_font(FAMILY, FontStyle::Normal, FONT)
-        .map_err(|_| anyhow::anyhow!("the embedded font could not be loaded"))?;
+    ensure_registered()?;
     let root = BitMapBackend::new(path, (1000, 500)).into_drawing_area();
     root.fill(&WHITE)?;
     let max = cells

@@ -12,5 +12,6 @@ mod overlay;
 pub mod profile;
 
 pub use colors::{TERRAIN_COLORS, color_at};
+pub use fonts::{FAMILY, ensure_registered};
 pub use map::render_map;
 pub use overlay::{ColorBar, MapOverlay, OverlayMarker, OverlayPath};
