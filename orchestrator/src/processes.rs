@@ -13,8 +13,7 @@ use iceoryx2::prelude::*;
 use plamo_interfaces::{ComponentKind, RunId, ServiceNames};
 
 use crate::ipc::{
-    IpcError, IpcSettings, RemoteComponent, dead_nodes, end_run, remove_stale_resources,
-    run_config,
+    IpcError, IpcSettings, RemoteComponent, dead_nodes, end_run, remove_stale_resources, run_config,
 };
 use crate::lockstep::{Link, Links, RunError};
 use crate::spec::RunSpec;
@@ -150,13 +149,15 @@ impl ProcessRun {
                 .stdout(Stdio::null())
                 .stderr(Stdio::inherit());
             let child = cmd.spawn().map_err(|e| {
-                RunError::Setup(format!("starting `{} component {kind}`: {e}", exe.display()))
+                RunError::Setup(format!(
+                    "starting `{} component {kind}`: {e}",
+                    exe.display()
+                ))
             })?;
             *slot.lock().expect("child slot") = Some(child);
             Ok(())
         };
-        let (mut physics, slot) =
-            self.open(node, run, ComponentKind::Physics, 0, settings)?;
+        let (mut physics, slot) = self.open(node, run, ComponentKind::Physics, 0, settings)?;
         spawn(ComponentKind::Physics, 0, &slot)?;
         let mut planners = Vec::new();
         let mut controllers = Vec::new();
@@ -218,7 +219,9 @@ impl ProcessRun {
         let mut killed = Vec::new();
         for (name, slot) in &self.children {
             let Ok(mut guard) = slot.lock() else { continue };
-            let Some(child) = guard.as_mut() else { continue };
+            let Some(child) = guard.as_mut() else {
+                continue;
+            };
             loop {
                 match child.try_wait() {
                     Ok(Some(_)) => break,

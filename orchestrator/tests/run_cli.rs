@@ -30,7 +30,11 @@ fn run_ok(args: &[&str], out: &Path) -> Output {
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&o.stdout);
-    assert!(text.contains("trajectory digest"), "{text}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        text.contains("trajectory digest"),
+        "{text}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     o
 }
 
@@ -127,7 +131,10 @@ fn in_process_and_multi_process_runs_are_bit_identical() {
     assert_eq!(leftovers("cli-test-det"), Vec::<String>::new());
     // Another seed changes the start heading, so the trajectory.
     let c = out_dir("seed");
-    let oc = run_ok(&["--instructions", ROUTE, "--max-seconds", "3", "--seed", "8"], &c);
+    let oc = run_ok(
+        &["--instructions", ROUTE, "--max-seconds", "3", "--seed", "8"],
+        &c,
+    );
     assert_ne!(digest(&oa), digest(&oc));
 }
 
@@ -151,7 +158,10 @@ fn two_agents_with_their_own_instructions_run_in_both_modes() {
     let ob = run_ok(&margs, &b);
     assert_eq!(digest(&oa), digest(&ob));
     let traj = std::fs::read_to_string(a.join("trajectory.csv")).unwrap();
-    assert!(traj.lines().any(|l| l.starts_with("0,1,")), "agent 1 recorded");
+    assert!(
+        traj.lines().any(|l| l.starts_with("0,1,")),
+        "agent 1 recorded"
+    );
     let text = String::from_utf8_lossy(&oa.stdout);
     assert!(text.contains("agent 1"), "{text}");
     assert_eq!(leftovers("cli-test-two"), Vec::<String>::new());
@@ -176,16 +186,23 @@ fn a_sigkilled_component_stops_the_run_and_leaves_no_files() {
     // Wait until the components are up and the run has gone on for a while.
     let start = Instant::now();
     let physics = loop {
-        if let Some((pid, _)) = component_pids(run).into_iter().find(|(_, k)| k == "physics") {
+        if let Some((pid, _)) = component_pids(run)
+            .into_iter()
+            .find(|(_, k)| k == "physics")
+        {
             break pid;
         }
-        assert!(start.elapsed() < Duration::from_secs(60), "no physics process");
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no physics process"
+        );
         std::thread::sleep(Duration::from_millis(20));
     };
     std::thread::sleep(Duration::from_millis(1500));
     let killed_at = Instant::now();
     sigkill(physics);
-    let status = wait_with_deadline(&mut orch, Duration::from_secs(30)).expect("orchestrator hangs");
+    let status =
+        wait_with_deadline(&mut orch, Duration::from_secs(30)).expect("orchestrator hangs");
     let took = killed_at.elapsed();
     let mut err = String::new();
     std::io::Read::read_to_string(orch.stderr.as_mut().unwrap(), &mut err).unwrap();
@@ -215,7 +232,10 @@ fn a_crashing_component_is_named_with_its_tick() {
     .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
-    assert!(err.contains("physics died") && err.contains("tick 40"), "{err}");
+    assert!(
+        err.contains("physics died") && err.contains("tick 40"),
+        "{err}"
+    );
     assert_eq!(leftovers(run), Vec::<String>::new());
 }
 
@@ -263,7 +283,10 @@ fn components_exit_when_the_orchestrator_is_killed() {
     .unwrap();
     let start = Instant::now();
     while component_pids(run).len() < 3 {
-        assert!(start.elapsed() < Duration::from_secs(60), "components did not start");
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "components did not start"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
     std::thread::sleep(Duration::from_millis(500));
@@ -280,7 +303,15 @@ fn components_exit_when_the_orchestrator_is_killed() {
     }
     // A new run with the same id cleans whatever the killed orchestrator left.
     let o = run_ok(
-        &["--instructions", ROUTE, "--max-seconds", "1", "--processes", "--run", run],
+        &[
+            "--instructions",
+            ROUTE,
+            "--max-seconds",
+            "1",
+            "--processes",
+            "--run",
+            run,
+        ],
         &out_dir("orphan-after"),
     );
     assert!(!digest(&o).is_empty());
@@ -312,8 +343,14 @@ fn concurrent_runs_are_isolated() {
     let b = spawn("cli-test-conc-b", "2", &db);
     let oa = a.wait_with_output().unwrap();
     let ob = b.wait_with_output().unwrap();
-    let ra = run_ok(&["--instructions", ROUTE, "--max-seconds", "2", "--seed", "1"], &out_dir("conc-ra"));
-    let rb = run_ok(&["--instructions", ROUTE, "--max-seconds", "2", "--seed", "2"], &out_dir("conc-rb"));
+    let ra = run_ok(
+        &["--instructions", ROUTE, "--max-seconds", "2", "--seed", "1"],
+        &out_dir("conc-ra"),
+    );
+    let rb = run_ok(
+        &["--instructions", ROUTE, "--max-seconds", "2", "--seed", "2"],
+        &out_dir("conc-rb"),
+    );
     assert_eq!(digest(&oa), digest(&ra));
     assert_eq!(digest(&ob), digest(&rb));
     assert_ne!(digest(&oa), digest(&ob));

@@ -17,8 +17,14 @@ fn run(spec: &RunSpec, seconds: f64) -> (u64, Vec<PhysicsOutput>) {
     let scene = spec.load_scene().unwrap();
     let links = spec.in_process(&scene).unwrap();
     let counts = vec![2; spec.agents()];
-    let mut ls =
-        Lockstep::start(links, scene, &counts, &ControllerSettings::default(), seconds).unwrap();
+    let mut ls = Lockstep::start(
+        links,
+        scene,
+        &counts,
+        &ControllerSettings::default(),
+        seconds,
+    )
+    .unwrap();
     let mut states = vec![*ls.world()];
     while ls.step().unwrap() == StepStatus::Running {
         states.push(*ls.world());

@@ -92,7 +92,10 @@ pub fn run(args: ComponentArgs) -> anyhow::Result<ExitCode> {
     }
     let cfg = run_config(&run)?;
     let node = NodeBuilder::new()
-        .name(&NodeName::new(&node_name(args.kind, args.agent)).map_err(|e| anyhow::anyhow!("{e:?}"))?)
+        .name(
+            &NodeName::new(&node_name(args.kind, args.agent))
+                .map_err(|e| anyhow::anyhow!("{e:?}"))?,
+        )
         .config(&cfg)
         .create::<ipc::Service>()
         .map_err(|e| anyhow::anyhow!("creating the component's node: {e:?}"))?;

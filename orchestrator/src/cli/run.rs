@@ -152,7 +152,13 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         .collect();
     let texts: Vec<Vec<String>> = planners
         .iter()
-        .map(|p| p.planner().instructions().iter().map(|i| i.text.clone()).collect())
+        .map(|p| {
+            p.planner()
+                .instructions()
+                .iter()
+                .map(|i| i.text.clone())
+                .collect()
+        })
         .collect();
 
     let run_id = RunId::new(&args.run.clone().unwrap_or_else(generated_run_id))
@@ -190,7 +196,8 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
     );
     let (lockstep, status, loop_s, late) = match outcome {
         Ok(v) => v,
-        Err((e, links)) => {
+        Err(failed) => {
+            let (e, links) = *failed;
             let killed = procs.map(|p| p.finish(links)).unwrap_or_default();
             if !killed.is_empty() {
                 eprintln!("stopped by force: {}", killed.join(", "));
@@ -215,11 +222,19 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
     };
     println!(
         "{} on `{}` ({}, {} agent(s), {}): {status_text} after {sim_s:.2} s simulated",
-        if args.processes { "multi-process" } else { "in-process" },
+        if args.processes {
+            "multi-process"
+        } else {
+            "in-process"
+        },
         scene.name,
         spec.backend,
         spec.agents(),
-        if args.realtime { "real time" } else { "as fast as possible" },
+        if args.realtime {
+            "real time"
+        } else {
+            "as fast as possible"
+        },
     );
     let mut all_ok = status == StepStatus::Finished;
     for (k, (results, names)) in report.iter().zip(&texts).enumerate() {
@@ -273,7 +288,16 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
     if let (Some(dir), Some(rec)) = (&args.out, recorder.as_mut()) {
         rec.finish()?;
         write_outputs(
-            dir, &scene, &spec, &planners, rec, &report, &texts, status_text, &world, digest,
+            dir,
+            &scene,
+            &spec,
+            &planners,
+            rec,
+            &report,
+            &texts,
+            status_text,
+            &world,
+            digest,
         )?;
         println!("wrote {}", dir.display());
     }
@@ -285,6 +309,8 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
 }
 
 type Driven = (Lockstep, StepStatus, f64, u64);
+/// A run error and the links to shut down (boxed: the links are large).
+type Failed = Box<(plamo::lockstep::RunError, Option<plamo::lockstep::Links>)>;
 
 fn drive(
     links: plamo::lockstep::Links,
@@ -294,10 +320,10 @@ fn drive(
     args: &RunArgs,
     mut recorder: Option<&mut Recorder>,
     texts: &[Vec<String>],
-) -> Result<Driven, (plamo::lockstep::RunError, Option<plamo::lockstep::Links>)> {
+) -> Result<Driven, Failed> {
     let controller = plamo_controller::ControllerSettings::default();
     let mut ls = Lockstep::start(links, scene.clone(), counts, &controller, max_seconds)
-        .map_err(|e| (e, None))?;
+        .map_err(|e| Box::new((e, None)))?;
     let io = |e: std::io::Error| plamo::lockstep::RunError::Setup(format!("recording: {e}"));
     let bar = if args.quiet {
         ProgressBar::hidden()
@@ -313,7 +339,7 @@ fn drive(
     macro_rules! bail {
         ($e:expr) => {{
             bar.abandon();
-            return Err(($e, Some(ls.into_links())));
+            return Err(Box::new(($e, Some(ls.into_links()))));
         }};
     }
     if let Some(r) = recorder.as_deref_mut()
@@ -427,7 +453,10 @@ fn write_outputs(
             })
             .collect(),
     };
-    std::fs::write(dir.join("metrics.json"), serde_json::to_string_pretty(&metrics)?)?;
+    std::fs::write(
+        dir.join("metrics.json"),
+        serde_json::to_string_pretty(&metrics)?,
+    )?;
 
     let bar = speed_bar();
     let mut overlay = MapOverlay {

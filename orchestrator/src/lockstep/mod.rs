@@ -114,9 +114,8 @@ impl Lockstep {
         let mut digest = Digest::default();
         digest.add(&world);
         let per = PHYSICS_STEPS_PER_CONTROL as u64;
-        let max_tick = ((max_seconds * plamo_interfaces::PHYSICS_HZ as f64).ceil() as u64)
-            .div_ceil(per)
-            * per;
+        let max_tick =
+            ((max_seconds * plamo_interfaces::PHYSICS_HZ as f64).ceil() as u64).div_ceil(per) * per;
         Ok(Self {
             links,
             scene,
