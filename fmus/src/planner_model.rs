@@ -170,8 +170,10 @@ pub fn build(
             .ok_or_else(|| format!("internal: no variable {n}"))
     };
     let scene = resolve_scene(&text(values, spec, "scene"), ctx)?;
-    let mut settings = PlannerSettings::default();
-    settings.slope_preference_c = real(values, vr("terrain_preference")?);
+    let settings = PlannerSettings {
+        slope_preference_c: real(values, vr("terrain_preference")?),
+        ..Default::default()
+    };
     let input_vr = [vr("character.x")?, vr("character.y")?, vr("character.z")?];
     let start = [real(values, input_vr[0]), real(values, input_vr[1])];
     let planner = Planner::new(scene, &text(values, spec, "instructions"), start, settings)

@@ -21,7 +21,7 @@ fn a_host_character_following_the_planner_fmu_reaches_every_landmark() {
         .unwrap()
         .load(fmi2Type::fmi2CoSimulation)
         .unwrap();
-    let vars = fmu.variables().clone();
+    let vars = fmu.variables();
     let var = |n: &str| {
         vars.get(n)
             .unwrap_or_else(|| panic!("variable {n} in modelDescription.xml"))
