@@ -537,7 +537,7 @@ pub unsafe extern "C" fn fmi2DoStep(
 }
 
 /// Log why an optional FMI function is refused.
-fn unsupported(c: fmi2Component, call: &str, why: &str) -> fmi2Status {
+fn refuse(c: fmi2Component, call: &str, why: &str) -> fmi2Status {
     with_component(c, |comp| {
         comp.log(
             FMI2_ERROR,
@@ -552,147 +552,32 @@ const NO_STATE: &str = "canGetAndSetFMUstate is false in modelDescription.xml";
 const NO_DERIVATIVES: &str = "the FMU declares no derivatives (maxOutputDerivativeOrder = 0)";
 const SYNC_STEPS: &str = "fmi2DoStep always completes synchronously";
 
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, _s: *mut fmi2FMUstate) -> fmi2Status {
-    unsupported(c, "fmi2GetFMUstate", NO_STATE)
+/// Define optional FMI functions that plamo refuses with a logged reason.
+macro_rules! unsupported {
+    ($($name:ident($($arg:ident: $ty:ty),*) => $why:expr;)*) => {$(
+        /// # Safety
+        /// FMI contract: `c` is null or a live instance.
+        #[unsafe(no_mangle)]
+        pub unsafe extern "C" fn $name(c: fmi2Component, $($arg: $ty),*) -> fmi2Status {
+            refuse(c, stringify!($name), $why)
+        }
+    )*};
 }
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, _s: fmi2FMUstate) -> fmi2Status {
-    unsupported(c, "fmi2SetFMUstate", NO_STATE)
-}
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, _s: *mut fmi2FMUstate) -> fmi2Status {
-    unsupported(c, "fmi2FreeFMUstate", NO_STATE)
-}
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
-    c: fmi2Component,
-    _s: fmi2FMUstate,
-    _n: *mut usize,
-) -> fmi2Status {
-    unsupported(c, "fmi2SerializedFMUstateSize", NO_STATE)
-}
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SerializeFMUstate(
-    c: fmi2Component,
-    _s: fmi2FMUstate,
-    _b: *mut fmi2Byte,
-    _n: usize,
-) -> fmi2Status {
-    unsupported(c, "fmi2SerializeFMUstate", NO_STATE)
-}
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
-    c: fmi2Component,
-    _b: *const fmi2Byte,
-    _n: usize,
-    _s: *mut fmi2FMUstate,
-) -> fmi2Status {
-    unsupported(c, "fmi2DeSerializeFMUstate", NO_STATE)
-}
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
-    c: fmi2Component,
-    _u: *const fmi2ValueReference,
-    _nu: usize,
-    _z: *const fmi2ValueReference,
-    _nz: usize,
-    _dv: *const fmi2Real,
-    _dz: *mut fmi2Real,
-) -> fmi2Status {
-    unsupported(c, "fmi2GetDirectionalDerivative", NO_DERIVATIVES)
-}
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
-    c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    _n: usize,
-    _order: *const fmi2Integer,
-    _value: *const fmi2Real,
-) -> fmi2Status {
-    unsupported(c, "fmi2SetRealInputDerivatives", NO_DERIVATIVES)
-}
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
-    c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    _n: usize,
-    _order: *const fmi2Integer,
-    _value: *mut fmi2Real,
-) -> fmi2Status {
-    unsupported(c, "fmi2GetRealOutputDerivatives", NO_DERIVATIVES)
-}
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
-    unsupported(c, "fmi2CancelStep", SYNC_STEPS)
-}
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetStatus(
-    c: fmi2Component,
-    _k: fmi2StatusKind,
-    _v: *mut fmi2Status,
-) -> fmi2Status {
-    unsupported(c, "fmi2GetStatus", SYNC_STEPS)
-}
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetRealStatus(
-    c: fmi2Component,
-    _k: fmi2StatusKind,
-    _v: *mut fmi2Real,
-) -> fmi2Status {
-    unsupported(c, "fmi2GetRealStatus", SYNC_STEPS)
-}
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetIntegerStatus(
-    c: fmi2Component,
-    _k: fmi2StatusKind,
-    _v: *mut fmi2Integer,
-) -> fmi2Status {
-    unsupported(c, "fmi2GetIntegerStatus", SYNC_STEPS)
-}
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetBooleanStatus(
-    c: fmi2Component,
-    _k: fmi2StatusKind,
-    _v: *mut fmi2Boolean,
-) -> fmi2Status {
-    unsupported(c, "fmi2GetBooleanStatus", SYNC_STEPS)
-}
-/// # Safety
-/// FMI contract.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetStringStatus(
-    c: fmi2Component,
-    _k: fmi2StatusKind,
-    _v: *mut fmi2String,
-) -> fmi2Status {
-    unsupported(c, "fmi2GetStringStatus", SYNC_STEPS)
+
+unsupported! {
+    fmi2GetFMUstate(_s: *mut fmi2FMUstate) => NO_STATE;
+    fmi2SetFMUstate(_s: fmi2FMUstate) => NO_STATE;
+    fmi2FreeFMUstate(_s: *mut fmi2FMUstate) => NO_STATE;
+    fmi2SerializedFMUstateSize(_s: fmi2FMUstate, _n: *mut usize) => NO_STATE;
+    fmi2SerializeFMUstate(_s: fmi2FMUstate, _b: *mut fmi2Byte, _n: usize) => NO_STATE;
+    fmi2DeSerializeFMUstate(_b: *const fmi2Byte, _n: usize, _s: *mut fmi2FMUstate) => NO_STATE;
+    fmi2GetDirectionalDerivative(_u: *const fmi2ValueReference, _nu: usize, _z: *const fmi2ValueReference, _nz: usize, _dv: *const fmi2Real, _dz: *mut fmi2Real) => NO_DERIVATIVES;
+    fmi2SetRealInputDerivatives(_vr: *const fmi2ValueReference, _n: usize, _order: *const fmi2Integer, _value: *const fmi2Real) => NO_DERIVATIVES;
+    fmi2GetRealOutputDerivatives(_vr: *const fmi2ValueReference, _n: usize, _order: *const fmi2Integer, _value: *mut fmi2Real) => NO_DERIVATIVES;
+    fmi2CancelStep() => SYNC_STEPS;
+    fmi2GetStatus(_k: fmi2StatusKind, _v: *mut fmi2Status) => SYNC_STEPS;
+    fmi2GetRealStatus(_k: fmi2StatusKind, _v: *mut fmi2Real) => SYNC_STEPS;
+    fmi2GetIntegerStatus(_k: fmi2StatusKind, _v: *mut fmi2Integer) => SYNC_STEPS;
+    fmi2GetBooleanStatus(_k: fmi2StatusKind, _v: *mut fmi2Boolean) => SYNC_STEPS;
+    fmi2GetStringStatus(_k: fmi2StatusKind, _v: *mut fmi2String) => SYNC_STEPS;
 }
