@@ -10,8 +10,8 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use plamo_planner::synthetic::{ball_scene, hills_scene};
 use plamo_planner::{
-    AStar, Components, PlanGrid, Planner, PlannerSettings, Prediction, SearchLimits, SpeedProblem,
-    forward_backward, predict_conflict, solve_speed_qp, solve_speed_socp,
+    AStar, Components, Heuristic, PlanGrid, Planner, PlannerSettings, Prediction, SearchLimits,
+    SpeedProblem, forward_backward, predict_conflict, solve_speed_qp, solve_speed_socp,
 };
 use plamo_scenes::{Footprint, Wall, builtin};
 use rand::{Rng, SeedableRng};
@@ -48,19 +48,12 @@ fn bench_astar(c: &mut Criterion) {
         })
     });
     // Baseline: pathfinding::astar on the same edges, costs in micrometres (it needs
-    // an Ord cost), same octile heuristic to the goals' bounding box.
-    let (gi, gj) = (goals[0] % grid.nx, goals[0] / grid.nx);
-    let (mut lo, mut hi) = ((gi, gj), (gi, gj));
-    for &c in &goals {
-        let (i, j) = (c % grid.nx, c / grid.nx);
-        lo = (lo.0.min(i), lo.1.min(j));
-        hi = (hi.0.max(i), hi.1.max(j));
-    }
+    // an Ord cost), same heuristic (octile distance + height difference to the goals).
+    let heur = Heuristic::new(&grid, &goals).unwrap();
     let mut is_goal = vec![false; grid.len()];
     for &c in &goals {
         is_goal[c] = true;
     }
-    let res_um = grid.resolution * 1e6;
     let grid = &grid;
     g.bench_function("pathfinding_astar_baseline", |b| {
         b.iter(|| {
@@ -72,13 +65,7 @@ fn bench_astar(c: &mut Criterion) {
                             .map(|(n, w)| (n, (w as f64 * 1e6) as u64))
                     })
                 },
-                |&c| {
-                    let (i, j) = (c % grid.nx, c / grid.nx);
-                    let dx = lo.0.saturating_sub(i).max(i.saturating_sub(hi.0)) as f64;
-                    let dy = lo.1.saturating_sub(j).max(j.saturating_sub(hi.1)) as f64;
-                    let (a, b) = if dx > dy { (dx, dy) } else { (dy, dx) };
-                    (res_um * ((a - b) + b * std::f64::consts::SQRT_2)) as u64
-                },
+                |&c| (heur.at_cell(grid, c) * 1e6) as u64,
                 |&c| is_goal[c],
             );
             black_box(r.unwrap())

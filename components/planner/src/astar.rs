@@ -1,8 +1,5 @@
 //! Stage 2: A* on the 8-connected planning grid, goal = the nearest cell of a set.
 
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
-
 use crate::grid::{DIRS, PlanGrid};
 
 /// Cells A* must not enter (dynamic obstacles at their predicted positions) and an
@@ -42,24 +39,111 @@ pub struct GridPath {
     pub cost_to: Vec<f64>,
 }
 
+/// A* lower bound on the cost from a cell to the nearest of a goal set.
+///
+/// Every edge costs at least `sqrt(dxy^2 + dh^2) + k |dh|` with
+/// `k = PlanGrid::climb_cost_lower_bound`. Summed over a path, the 3D lengths are at
+/// least `sqrt(D^2 + H^2)` (triangle inequality) and the climb terms at least `k H`,
+/// where `D` is the octile distance and `H` the height difference to the goals (to
+/// their bounding box and height interval, so the bound holds for every goal at once).
+/// Both terms change by at most the edge's share along an edge, so the bound is
+/// consistent as well as admissible; it is shrunk by 1e-6 relative so that the `f32`
+/// rounding of stored edge costs cannot break that.
+#[derive(Debug, Clone, Copy)]
+pub struct Heuristic {
+    lo: [usize; 2],
+    hi: [usize; 2],
+    h_lo: f64,
+    h_hi: f64,
+    res: f64,
+    k: f64,
+}
+
+impl Heuristic {
+    /// The bound to `goals` (cells outside the grid are ignored), `None` without goals.
+    pub fn new(g: &PlanGrid, goals: &[usize]) -> Option<Self> {
+        let mut it = goals.iter().copied().filter(|&c| c < g.len());
+        let first = it.next()?;
+        let ij = |c: usize| [c % g.nx, c / g.nx];
+        let mut h = Self {
+            lo: ij(first),
+            hi: ij(first),
+            h_lo: g.height[first],
+            h_hi: g.height[first],
+            res: g.resolution,
+            k: g.climb_cost_lower_bound,
+        };
+        for c in it {
+            h.include(g, c);
+        }
+        Some(h)
+    }
+
+    fn include(&mut self, g: &PlanGrid, c: usize) {
+        let [i, j] = [c % g.nx, c / g.nx];
+        self.lo = [self.lo[0].min(i), self.lo[1].min(j)];
+        self.hi = [self.hi[0].max(i), self.hi[1].max(j)];
+        self.h_lo = self.h_lo.min(g.height[c]);
+        self.h_hi = self.h_hi.max(g.height[c]);
+    }
+
+    /// The bound at cell (i, j) of terrain height `z` \[m\].
+    #[inline]
+    pub fn at(&self, i: usize, j: usize, z: f64) -> f64 {
+        let dx = self.lo[0]
+            .saturating_sub(i)
+            .max(i.saturating_sub(self.hi[0])) as f64;
+        let dy = self.lo[1]
+            .saturating_sub(j)
+            .max(j.saturating_sub(self.hi[1])) as f64;
+        let (a, b) = if dx > dy { (dx, dy) } else { (dy, dx) };
+        let d = self.res * ((a - b) + b * std::f64::consts::SQRT_2);
+        let dz = (self.h_lo - z).max(z - self.h_hi).max(0.0);
+        ((d * d + dz * dz).sqrt() + self.k * dz) * (1.0 - 1e-6)
+    }
+
+    /// Whether (i, j) lies in the goals' bounding box.
+    #[inline]
+    fn in_box(&self, i: usize, j: usize) -> bool {
+        (self.lo[0]..=self.hi[0]).contains(&i) && (self.lo[1]..=self.hi[1]).contains(&j)
+    }
+
+    /// The bound at cell `c` of grid `g`.
+    #[inline]
+    pub fn at_cell(&self, g: &PlanGrid, c: usize) -> f64 {
+        self.at(c % g.nx, c / g.nx, g.height[c])
+    }
+}
+
+/// Per-cell search state, 16 bytes so four share a cache line.
+#[derive(Debug, Default, Clone, Copy)]
+struct Node {
+    /// Cost from the start \[m\].
+    g: f64,
+    /// `gen` = open (`g`, `pos` and the parent valid), `gen + 1` = closed, anything
+    /// else = unseen.
+    stamp: u32,
+    /// Index in the open heap while open.
+    pos: u32,
+}
+
 /// Reusable A* buffers (generation-stamped, so a search costs nothing to reset).
 #[derive(Debug, Default, Clone)]
 pub struct AStar {
     gen_: u32,
-    stamp: Vec<u32>,
+    node: Vec<Node>,
+    /// Direction index (into `DIRS`) of the step that reached each open/closed cell.
+    parent_dir: Vec<u8>,
     goal: Vec<u32>,
-    closed: Vec<u32>,
-    g: Vec<f64>,
-    parent: Vec<u32>,
-    heap: BinaryHeap<Reverse<(u64, u32)>>,
+    heap: OpenHeap,
     /// Nodes expanded by the last search.
     pub expanded: usize,
 }
 
 impl AStar {
     /// Search from `start` to the nearest (by cost) of `goals` over edges passable at
-    /// head height `min_head`. The heuristic is the octile distance to the goals'
-    /// bounding box, admissible because every edge costs at least its XY length.
+    /// head height `min_head`, with the consistent [`Heuristic`]: the returned path is
+    /// a cheapest one.
     pub fn search(
         &mut self,
         g: &PlanGrid,
@@ -69,107 +153,301 @@ impl AStar {
         limits: &SearchLimits,
     ) -> Option<GridPath> {
         let n = g.len();
-        if self.stamp.len() != n {
-            self.stamp = vec![0; n];
+        if self.node.len() != n {
+            self.node = vec![Node::default(); n];
+            self.parent_dir = vec![0; n];
             self.goal = vec![0; n];
-            self.closed = vec![0; n];
-            self.g = vec![0.0; n];
-            self.parent = vec![0; n];
             self.gen_ = 0;
         }
-        self.gen_ = self.gen_.wrapping_add(1);
-        if self.gen_ == 0 {
-            self.stamp.fill(0);
-            self.goal.fill(0);
-            self.closed.fill(0);
-            self.gen_ = 1;
-        }
-        let gen_ = self.gen_;
+        // Two stamps per search (open, closed); 0 stays "unseen".
+        self.gen_ = match self.gen_.checked_add(2) {
+            Some(x) if x < u32::MAX => x,
+            _ => {
+                self.node.fill(Node::default());
+                self.goal.fill(0);
+                1
+            }
+        };
+        let (open, closed) = (self.gen_, self.gen_ + 1);
         self.expanded = 0;
-        let (mut lo_i, mut lo_j, mut hi_i, mut hi_j) = (usize::MAX, usize::MAX, 0, 0);
-        let mut any_goal = false;
+        let mut heur: Option<Heuristic> = None;
         for &c in goals {
             if c < n && limits.allows(g, c) {
-                self.goal[c] = gen_;
-                any_goal = true;
-                let (i, j) = (c % g.nx, c / g.nx);
-                lo_i = lo_i.min(i);
-                lo_j = lo_j.min(j);
-                hi_i = hi_i.max(i);
-                hi_j = hi_j.max(j);
+                self.goal[c] = open;
+                match heur.as_mut() {
+                    Some(h) => h.include(g, c),
+                    None => heur = Heuristic::new(g, &[c]),
+                }
             }
         }
-        if !any_goal || start >= n {
+        let heur = heur?;
+        if start >= n {
             return None;
         }
-        let res = g.resolution;
-        let h = |c: usize| -> f64 {
-            let (i, j) = (c % g.nx, c / g.nx);
-            let dx = lo_i.saturating_sub(i).max(i.saturating_sub(hi_i)) as f64;
-            let dy = lo_j.saturating_sub(j).max(j.saturating_sub(hi_j)) as f64;
-            let (a, b) = if dx > dy { (dx, dy) } else { (dy, dx) };
-            res * ((a - b) + b * std::f64::consts::SQRT_2)
-        };
+        let offsets: [isize; 8] = std::array::from_fn(|d| g.offset(d));
+        let nx = g.nx;
         self.heap.clear();
-        self.stamp[start] = gen_;
-        self.g[start] = 0.0;
-        self.parent[start] = start as u32;
-        self.heap.push(Reverse((h(start).to_bits(), start as u32)));
-        while let Some(Reverse((_, cu))) = self.heap.pop() {
+        let h0 = heur.at_cell(g, start);
+        self.node[start] = Node {
+            g: 0.0,
+            stamp: open,
+            pos: 0,
+        };
+        self.heap
+            .push_or_decrease(h0.to_bits(), start as u32, &mut self.node);
+        while let Some(cu) = self.heap.pop(&mut self.node) {
             let c = cu as usize;
-            if self.closed[c] == gen_ {
-                continue;
-            }
-            self.closed[c] = gen_;
+            let nc = &mut self.node[c];
+            nc.stamp = closed;
+            let gc = nc.g;
             self.expanded += 1;
-            if self.goal[c] == gen_ {
+            let (ci, cj) = (c % nx, c / nx);
+            if heur.in_box(ci, cj) && self.goal[c] == open {
                 return Some(self.reconstruct(g, start, c));
             }
-            let gc = self.g[c];
-            let (ci, cj) = ((c % g.nx) as isize, (c / g.nx) as isize);
-            for (d, &(di, dj)) in DIRS.iter().enumerate() {
-                let (bi, bj) = (ci + di, cj + dj);
-                if bi < 0 || bj < 0 || bi >= g.nx as isize || bj >= g.ny as isize {
+            let edges = &g.edges[c];
+            for d in 0..8 {
+                let w = edges[d];
+                if w == f32::INFINITY {
                     continue;
                 }
-                let b = bj as usize * g.nx + bi as usize;
-                let w = if d < 4 {
-                    g.cost[d][c]
-                } else {
-                    g.cost[d - 4][b]
-                };
-                if !w.is_finite() || self.closed[b] == gen_ {
+                // A finite cost implies the neighbour is on the grid.
+                let b = c.wrapping_add_signed(offsets[d]);
+                let nb = &mut self.node[b];
+                if nb.stamp == closed {
                     continue;
                 }
                 if g.has_tops && g.edge_for(c, d, min_head).is_none() {
                     continue;
                 }
-                let nb = gc + w as f64;
-                if self.stamp[b] != gen_ || nb < self.g[b] {
-                    if self.stamp[b] != gen_ && !limits.allows(g, b) {
-                        // Mark as closed so the check runs once per search.
-                        self.closed[b] = gen_;
+                let gb = gc + w as f64;
+                if nb.stamp == open {
+                    if gb >= nb.g {
                         continue;
                     }
-                    self.stamp[b] = gen_;
-                    self.g[b] = nb;
-                    self.parent[b] = c as u32;
-                    self.heap.push(Reverse(((nb + h(b)).to_bits(), b as u32)));
+                } else if !limits.allows(g, b) {
+                    // Mark as closed so the check runs once per search.
+                    nb.stamp = closed;
+                    continue;
                 }
+                if nb.stamp != open {
+                    nb.stamp = open;
+                    nb.pos = u32::MAX;
+                }
+                nb.g = gb;
+                self.parent_dir[b] = d as u8;
+                let (di, dj) = DIRS[d];
+                let hb = heur.at(
+                    ci.wrapping_add_signed(di),
+                    cj.wrapping_add_signed(dj),
+                    g.height[b],
+                );
+                self.heap
+                    .push_or_decrease((gb + hb).to_bits(), b as u32, &mut self.node);
             }
         }
         None
     }
 
-    fn reconstruct(&self, _g: &PlanGrid, start: usize, goal: usize) -> GridPath {
+    fn reconstruct(&self, g: &PlanGrid, start: usize, goal: usize) -> GridPath {
         let mut cells = vec![goal];
         let mut c = goal;
         while c != start {
-            c = self.parent[c] as usize;
+            // Step back against the direction that reached `c`.
+            let d = self.parent_dir[c] as usize;
+            c = c.wrapping_add_signed(-g.offset(d));
             cells.push(c);
         }
         cells.reverse();
-        let cost_to = cells.iter().map(|&c| self.g[c]).collect();
+        let cost_to = cells.iter().map(|&c| self.node[c].g).collect();
         GridPath { cells, cost_to }
+    }
+}
+
+/// The open set: a 4-ary min-heap on the bit patterns of non-negative `f64` keys
+/// (which order like the numbers), indexed by cell through `Node::pos`, so an
+/// improved cell moves up in place instead of being pushed again. The heap then holds
+/// only the frontier, never stale entries.
+#[derive(Debug, Clone, Default)]
+struct OpenHeap {
+    items: Vec<(u64, u32)>,
+}
+
+impl OpenHeap {
+    const ARITY: usize = 4;
+
+    fn clear(&mut self) {
+        self.items.clear();
+    }
+
+    /// Insert `cell` with `key`, or lower its key when `node[cell].pos` is valid.
+    #[inline]
+    fn push_or_decrease(&mut self, key: u64, cell: u32, node: &mut [Node]) {
+        let p = node[cell as usize].pos as usize;
+        let at = if p < self.items.len() && self.items[p].1 == cell {
+            self.items[p].0 = key;
+            p
+        } else {
+            self.items.push((key, cell));
+            self.items.len() - 1
+        };
+        self.sift_up(at, node);
+    }
+
+    #[inline]
+    fn pop(&mut self, node: &mut [Node]) -> Option<u32> {
+        let top = self.items.first()?.1;
+        let last = self.items.pop()?;
+        if !self.items.is_empty() {
+            self.items[0] = last;
+            self.sift_down(0, node);
+        }
+        Some(top)
+    }
+
+    #[inline]
+    fn sift_up(&mut self, mut i: usize, node: &mut [Node]) {
+        let it = self.items[i];
+        while i > 0 {
+            let p = (i - 1) / Self::ARITY;
+            if self.items[p].0 <= it.0 {
+                break;
+            }
+            self.items[i] = self.items[p];
+            node[self.items[i].1 as usize].pos = i as u32;
+            i = p;
+        }
+        self.items[i] = it;
+        node[it.1 as usize].pos = i as u32;
+    }
+
+    #[inline]
+    fn sift_down(&mut self, mut i: usize, node: &mut [Node]) {
+        let it = self.items[i];
+        let n = self.items.len();
+        loop {
+            let first = i * Self::ARITY + 1;
+            if first >= n {
+                break;
+            }
+            let mut m = first;
+            for k in first + 1..(first + Self::ARITY).min(n) {
+                if self.items[k].0 < self.items[m].0 {
+                    m = k;
+                }
+            }
+            if self.items[m].0 >= it.0 {
+                break;
+            }
+            self.items[i] = self.items[m];
+            node[self.items[i].1 as usize].pos = i as u32;
+            i = m;
+        }
+        self.items[i] = it;
+        node[it.1 as usize].pos = i as u32;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+
+    use super::*;
+    use crate::PlannerSettings;
+    use crate::synthetic::{flat_scene, hills_scene, pyramid_scene};
+
+    /// Cost to the nearest goal from every cell: multi-source Dijkstra from the goals
+    /// (the graph is symmetric), the reference A* must match.
+    fn dijkstra_to(g: &PlanGrid, goals: &[usize], min_head: f32) -> Vec<f64> {
+        let mut dist = vec![f64::INFINITY; g.len()];
+        let mut heap = BinaryHeap::new();
+        for &c in goals {
+            dist[c] = 0.0;
+            heap.push(Reverse((0u64, c)));
+        }
+        while let Some(Reverse((k, c))) = heap.pop() {
+            if f64::from_bits(k) > dist[c] {
+                continue;
+            }
+            for d in 0..8 {
+                if let Some((b, w)) = g.edge_for(c, d, min_head) {
+                    let nb = dist[c] + w as f64;
+                    if nb < dist[b] {
+                        dist[b] = nb;
+                        heap.push(Reverse((nb.to_bits(), b)));
+                    }
+                }
+            }
+        }
+        dist
+    }
+
+    fn check_exact(scene: &plamo_scenes::Scene, s: &PlannerSettings, goal: &str, min_head: f32) {
+        let g = PlanGrid::build(scene, s);
+        let goals: Vec<usize> = scene
+            .landmark_cells(scene.landmark(goal).unwrap())
+            .into_iter()
+            .map(|(i, j)| j * g.nx + i)
+            .filter(|&c| g.passable(c, min_head))
+            .collect();
+        let dist = dijkstra_to(&g, &goals, min_head);
+        let heur = Heuristic::new(&g, &goals).unwrap();
+        let mut astar = AStar::default();
+        let limits = SearchLimits::default();
+        let mut checked = 0;
+        for (c, &dc) in dist.iter().enumerate() {
+            let h = heur.at_cell(&g, c);
+            if dc.is_finite() {
+                assert!(h <= dc, "inadmissible at {c}: {h} > {dc}");
+            }
+            for d in 0..8 {
+                if let Some((b, w)) = g.edge_for(c, d, min_head) {
+                    let hb = heur.at_cell(&g, b);
+                    assert!(h <= w as f64 + hb, "inconsistent on {c} -> {b}");
+                }
+            }
+            // A* from a spread of starts.
+            if c % 197 == 0 && g.passable(c, min_head) {
+                let found = astar.search(&g, c, &goals, min_head, &limits);
+                match found {
+                    Some(p) => {
+                        let cost = *p.cost_to.last().unwrap();
+                        assert!(
+                            (cost - dc).abs() <= 1e-9 * dc.max(1.0),
+                            "start {c}: A* {cost} vs Dijkstra {dc}"
+                        );
+                        assert!(goals.contains(p.cells.last().unwrap()));
+                        checked += 1;
+                    }
+                    None => assert!(dc.is_infinite(), "start {c}: A* found nothing"),
+                }
+            }
+        }
+        assert!(checked > 10, "only {checked} starts checked");
+    }
+
+    #[test]
+    fn astar_cost_equals_dijkstra_on_hills() {
+        let s = PlannerSettings::default();
+        check_exact(&hills_scene(160, 3.0), &s, "ne", 0.5);
+    }
+
+    #[test]
+    fn astar_cost_equals_dijkstra_on_a_steep_pyramid_with_high_c() {
+        let s = PlannerSettings {
+            slope_preference_c: 10.0,
+            ..PlannerSettings::default()
+        };
+        check_exact(&pyramid_scene(2.0), &s, "east", 0.5);
+    }
+
+    #[test]
+    fn astar_cost_equals_dijkstra_under_a_ceiling() {
+        // Head height 1.2 m: the 0.9 m roof over the wall's gap blocks, so the car
+        // is unreachable from the west half and A* must say so.
+        let s = PlannerSettings::default();
+        check_exact(&flat_scene(), &s, "car", 0.5);
+        check_exact(&flat_scene(), &s, "car", 1.2);
     }
 }

@@ -1,12 +1,12 @@
 //! The planning grid: terrain samples (every `grid_stride`-th), wall clearance,
-//! headroom, and precomputed 8-connected edge costs.
+//! headroom, and precomputed 8-connected edge costs (all eight of a cell side by side,
+//! so a search reads one cache line per expanded cell).
 
 use plamo_scenes::Scene;
 
 use crate::PlannerSettings;
 
-/// Offsets of the 8 neighbours; the first four are the "forward" directions whose
-/// costs are stored per cell, the last four their opposites.
+/// Offsets of the 8 neighbours; `DIRS[d + 4]` is the opposite of `DIRS[d]`.
 pub(crate) const DIRS: [(isize, isize); 8] = [
     (1, 0),
     (0, 1),
@@ -37,17 +37,27 @@ pub struct PlanGrid {
     pub free: Vec<bool>,
     /// Whether any cell has a ceiling (lets searches skip headroom checks).
     pub has_tops: bool,
-    /// Edge cost for the four forward directions `DIRS[0..4]`, `INFINITY` when the
-    /// edge is removed (wall, corner cut, infeasible slope) \[m\].
-    pub cost: [Vec<f32>; 4],
+    /// Edge cost per cell and direction `DIRS[d]`, `INFINITY` when the edge is off
+    /// the grid or removed (wall, corner cut, infeasible slope) \[m\].
+    pub edges: Vec<[f32; 8]>,
+    /// Lower bound on an edge's cost per metre of height change on top of its 3D
+    /// length: `height_cost + slope_preference_c` (the preference term
+    /// `dxy * (e^(c * slope) - 1)` is at least `c * |dh|`) \[1\].
+    pub climb_cost_lower_bound: f64,
 }
 
 /// Cost of one edge: 3D length + height cost + terrain preference (paper 5.2).
 /// `None` when the slope is infeasible.
 pub(crate) fn edge_cost(s: &PlannerSettings, dxy: f64, dh: f64) -> Option<f64> {
+    edge_cost_with(s, s.max_slope.tan(), dxy, dh)
+}
+
+/// [`edge_cost`] with `tan(max_slope)` computed once by the caller.
+#[inline]
+fn edge_cost_with(s: &PlannerSettings, tan_max_slope: f64, dxy: f64, dh: f64) -> Option<f64> {
     let adh = dh.abs();
     let slope = adh / dxy;
-    if slope > s.max_slope.tan() && adh > s.max_step_height {
+    if slope > tan_max_slope && adh > s.max_step_height {
         return None;
     }
     let len = (dxy * dxy + dh * dh).sqrt();
@@ -113,7 +123,8 @@ impl PlanGrid {
                 }
             }
         }
-        let mut cost: [Vec<f32>; 4] = std::array::from_fn(|_| vec![f32::INFINITY; n]);
+        let mut edges = vec![[f32::INFINITY; 8]; n];
+        let tan_max_slope = s.max_slope.tan();
         for (d, &(di, dj)) in DIRS[..4].iter().enumerate() {
             let dxy = res * ((di * di + dj * dj) as f64).sqrt();
             for j in 0..ny {
@@ -139,8 +150,9 @@ impl PlanGrid {
                             continue;
                         }
                     }
-                    if let Some(w) = edge_cost(s, dxy, height[b] - height[a]) {
-                        cost[d][a] = w as f32;
+                    if let Some(w) = edge_cost_with(s, tan_max_slope, dxy, height[b] - height[a]) {
+                        edges[a][d] = w as f32;
+                        edges[b][d + 4] = w as f32;
                     }
                 }
             }
@@ -155,7 +167,8 @@ impl PlanGrid {
             has_tops,
             headroom,
             free,
-            cost,
+            edges,
+            climb_cost_lower_bound: s.height_cost + s.slope_preference_c,
         }
     }
 
@@ -196,19 +209,17 @@ impl PlanGrid {
     /// neighbour, or `None` when the edge is off-grid or removed.
     #[inline]
     pub fn edge(&self, a: usize, d: usize) -> Option<(usize, f32)> {
+        let w = self.edges[a][d];
+        // A finite cost implies the neighbour is on the grid.
+        w.is_finite()
+            .then(|| (a.wrapping_add_signed(self.offset(d)), w))
+    }
+
+    /// Index offset of the neighbour in direction `DIRS[d]`.
+    #[inline]
+    pub(crate) fn offset(&self, d: usize) -> isize {
         let (di, dj) = DIRS[d];
-        let i = (a % self.nx) as isize + di;
-        let j = (a / self.nx) as isize + dj;
-        if i < 0 || j < 0 || i >= self.nx as isize || j >= self.ny as isize {
-            return None;
-        }
-        let b = j as usize * self.nx + i as usize;
-        let w = if d < 4 {
-            self.cost[d][a]
-        } else {
-            self.cost[d - 4][b]
-        };
-        w.is_finite().then_some((b, w))
+        dj * self.nx as isize + di
     }
 
     /// Like [`Self::edge`], and both ends (and, diagonally, both corner cells) are

@@ -27,7 +27,7 @@ mod speed_qp;
 pub mod synthetic;
 mod timing;
 
-pub use astar::{AStar, GridPath, SearchLimits};
+pub use astar::{AStar, GridPath, Heuristic, SearchLimits};
 pub use component::{FLAG_FINISHED, FLAG_INFEASIBLE, FLAG_REPLANNED, PlannerComponent};
 pub use connectivity::{BLOCKED, Components};
 pub use dynamic::{Conflict, Prediction, predict, predict_conflict};

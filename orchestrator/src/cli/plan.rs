@@ -61,7 +61,7 @@ struct PlanJson<'a> {
 /// Speed colour scale: blue at or below 1 m/s, red at or above 3.5 m/s.
 fn speed_bar() -> ColorBar {
     ColorBar {
-        label: "planned speed [m/s]".into(),
+        label: "speed [m/s]".into(),
         min: 1.0,
         max: 3.5,
         colors: vec![

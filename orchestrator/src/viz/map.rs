@@ -556,6 +556,26 @@ fn color_bar(area: &Area, at: (i32, i32), height: i32, bar: &ColorBar) -> anyhow
     Ok(())
 }
 
+/// `text` split at spaces into lines at most `width` pixels wide in `font` (a single
+/// word wider than that gets a line of its own).
+fn wrap(area: &Area, text: &str, font: &TextStyle<'_>, width: i32) -> anyhow::Result<Vec<String>> {
+    let mut lines: Vec<String> = Vec::new();
+    for word in text.split_whitespace() {
+        if let Some(last) = lines.last_mut() {
+            let candidate = format!("{last} {word}");
+            if area.estimate_text_size(&candidate, font)?.0 as i32 <= width {
+                *last = candidate;
+                continue;
+            }
+        }
+        lines.push(word.to_string());
+    }
+    if lines.is_empty() {
+        lines.push(String::new());
+    }
+    Ok(lines)
+}
+
 /// Legend entries for what the map shows.
 fn legend(area: &Area, y0: i32, scene: &Scene, overlay: &MapOverlay) -> anyhow::Result<()> {
     let font = || (FAMILY, 13).into_font();
@@ -568,19 +588,30 @@ fn legend(area: &Area, y0: i32, scene: &Scene, overlay: &MapOverlay) -> anyhow::
         (FAMILY, 13).into_font().style(FontStyle::Bold),
     ))?;
     y += row;
-    let entry =
-        |y: i32, text: &str| area.draw(&Text::new(text.to_string(), (x + 36, y - 7), font()));
+    // Entries wrap at word boundaries to the panel's width; a wrapped entry pushes
+    // the rows below it down.
+    let text_w = area.dim_in_pixel().0 as i32 - (x + 36) - 6;
+    let line_h = 15;
+    let entry = |y: &mut i32, text: &str| -> anyhow::Result<()> {
+        let lines = wrap(area, text, &font().into(), text_w)?;
+        for (k, line) in lines.iter().enumerate() {
+            let ly = *y - 7 + k as i32 * line_h;
+            area.draw(&Text::new(line.clone(), (x + 36, ly), font()))?;
+        }
+        *y += (lines.len() as i32 - 1) * line_h;
+        Ok(())
+    };
     area.draw(&Rectangle::new(
         [(x, y - 8), (x + 26, y + 6)],
         WALL.filled(),
     ))?;
-    entry(y, "wall")?;
+    entry(&mut y, "wall")?;
     y += row;
     let box_ = vec![(x, y - 8), (x + 26, y - 8), (x + 26, y + 6), (x, y + 6)];
     area.draw(&Polygon::new(box_.clone(), CEILING.mix(0.18).filled()))?;
     hatch(area, &box_, 6.0, CEILING.mix(0.85))?;
     area.draw(&PathElement::new(closed(&box_), CEILING.stroke_width(2)))?;
-    entry(y, "low ceiling (clearance)")?;
+    entry(&mut y, "low ceiling (clearance)")?;
     y += row;
     dashed(
         area,
@@ -590,13 +621,13 @@ fn legend(area: &Area, y0: i32, scene: &Scene, overlay: &MapOverlay) -> anyhow::
         MOVER.stroke_width(2),
     )?;
     area.draw(&Circle::new((x + 26, y), 4, MOVER.filled()))?;
-    entry(y, "moving obstacle, path")?;
+    entry(&mut y, "moving obstacle, path")?;
     y += row;
     area.draw(&Rectangle::new(
         [(x, y - 8), (x + 26, y + 6)],
         LANDMARK.stroke_width(3),
     ))?;
-    entry(y, "landmark region")?;
+    entry(&mut y, "landmark region")?;
     y += row;
     for p in &overlay.paths {
         if let Some(text) = &p.label {
@@ -606,7 +637,7 @@ fn legend(area: &Area, y0: i32, scene: &Scene, overlay: &MapOverlay) -> anyhow::
             } else {
                 area.draw(&PathElement::new(vec![(x, y), (x + 26, y)], style))?;
             }
-            entry(y, text)?;
+            entry(&mut y, text)?;
             y += row;
         }
     }
