@@ -1,5 +1,7 @@
 //! Typed errors of the physics component.
 
+use plamo_interfaces::Tick;
+
 use crate::BackendKind;
 
 /// Everything that can go wrong building or stepping a physics backend.
@@ -78,6 +80,36 @@ pub enum PhysicsError {
         /// Engine message.
         reason: String,
     },
+}
+
+impl PhysicsError {
+    /// `Ok` when `index` names one of the `count` humanoids of a world, else
+    /// [`PhysicsError::NoSuchHumanoid`] (shared by every backend).
+    pub(crate) fn check_index(index: usize, count: usize) -> Result<(), Self> {
+        if index < count {
+            Ok(())
+        } else {
+            Err(Self::NoSuchHumanoid { index, count })
+        }
+    }
+
+    /// [`PhysicsError::Diverged`] for `backend` at `tick`.
+    pub(crate) fn diverged(backend: BackendKind, tick: Tick, reason: impl Into<String>) -> Self {
+        Self::Diverged {
+            backend,
+            tick: tick.0,
+            reason: reason.into(),
+        }
+    }
+
+    /// The error a backend returns while a humanoid is still marked diverged.
+    pub(crate) fn still_diverged(backend: BackendKind, tick: Tick) -> Self {
+        Self::diverged(
+            backend,
+            tick,
+            "a previous step diverged; reset every diverged humanoid",
+        )
+    }
 }
 
 /// `"xyz".parse::<BackendKind>()` failed.

@@ -6,13 +6,13 @@ mod common;
 
 use plamo_physics::{BackendKind, HumanoidPose, PhysicsSettings, create_backend};
 
-/// Head heights of one squat cycle (2 s at 120 Hz) on flat ground.
+/// Head heights of five squat cycles (10 s at 120 Hz) on flat ground.
 fn head_heights(kind: BackendKind) -> Vec<f64> {
     let scene = common::flat();
     let mut b = create_backend(kind, &scene, &PhysicsSettings::default()).unwrap();
     b.reset(&HumanoidPose::standing(0.0, 0.0, 0.0, 0.0))
         .unwrap();
-    (0..240)
+    (0..1200)
         .map(|k| {
             b.set_action(&common::squat_targets(k as f64 / 120.0), None)
                 .unwrap();
@@ -22,9 +22,10 @@ fn head_heights(kind: BackendKind) -> Vec<f64> {
         .collect()
 }
 
-/// Measured: RMS 1.5 mm, max 4.8 mm, squat depth 0.111 m (rapier, f32, implicit
-/// springs) vs 0.113 m (MuJoCo, implicitfast position servos). Tolerance: RMS < 1 cm,
-/// max < 2 cm.
+/// Measured over five cycles of the balanced squat (`common::squat_targets`): RMS
+/// 0.8 mm, max 2.7 mm, squat depth 0.110 m (rapier, f32, implicit springs) vs 0.112 m
+/// (MuJoCo, implicitfast position servos). Tolerance: RMS < 5 mm, max < 1 cm (a
+/// humanoid that drifts, stumbles or falls in one engine only breaks it).
 #[test]
 fn squat_head_heights_agree_across_backends() {
     let r = head_heights(BackendKind::Rapier);
@@ -44,8 +45,8 @@ fn squat_head_heights_agree_across_backends() {
         depth(&r) > 0.05 && depth(&m) > 0.05,
         "the squat moves the head"
     );
-    assert!(rms < 0.01, "RMS {rms}");
-    assert!(max < 0.02, "max {max}");
+    assert!(rms < 0.005, "RMS {rms}");
+    assert!(max < 0.01, "max {max}");
 }
 
 /// The same model, read back the same way: at rest both backends place every body

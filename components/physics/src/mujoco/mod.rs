@@ -237,25 +237,6 @@ impl MujocoBackend {
         }
     }
 
-    fn check_index(&self, index: usize) -> Result<(), PhysicsError> {
-        if index < self.layouts.len() {
-            Ok(())
-        } else {
-            Err(PhysicsError::NoSuchHumanoid {
-                index,
-                count: self.layouts.len(),
-            })
-        }
-    }
-
-    fn diverged_error(&self, reason: String) -> PhysicsError {
-        PhysicsError::Diverged {
-            backend: BackendKind::Mujoco,
-            tick: self.tick.0,
-            reason,
-        }
-    }
-
     fn bad_qacc_count(&self) -> i32 {
         self.data.warning()[MjtWarning::mjWARN_BADQACC as usize].number
             + self.data.warning()[MjtWarning::mjWARN_BADQPOS as usize].number
@@ -277,7 +258,7 @@ impl PhysicsBackend for MujocoBackend {
     }
 
     fn reset_humanoid(&mut self, index: usize, pose: &HumanoidPose) -> Result<(), PhysicsError> {
-        self.check_index(index)?;
+        PhysicsError::check_index(index, self.layouts.len())?;
         pose.validate()?;
         self.write_pose(index, pose);
         self.data.forward();
@@ -292,7 +273,7 @@ impl PhysicsBackend for MujocoBackend {
         targets: &[f64],
         root_wrench: Option<RootWrench>,
     ) -> Result<(), PhysicsError> {
-        self.check_index(index)?;
+        PhysicsError::check_index(index, self.layouts.len())?;
         let (targets, w) = sanitize_action(
             targets,
             root_wrench,
@@ -318,8 +299,7 @@ impl PhysicsBackend for MujocoBackend {
 
     fn step(&mut self) -> Result<(), PhysicsError> {
         if self.diverged.iter().any(|d| *d) {
-            return Err(self
-                .diverged_error("a previous step diverged; reset every diverged humanoid".into()));
+            return Err(PhysicsError::still_diverged(BackendKind::Mujoco, self.tick));
         }
         let t_next = self.tick.advanced(1).seconds();
         for (k, ob) in self.scene.dynamic.iter().enumerate() {
@@ -340,16 +320,18 @@ impl PhysicsBackend for MujocoBackend {
         match bad {
             Some(i) => {
                 self.diverged.iter_mut().for_each(|d| *d = true);
-                Err(self.diverged_error(format!(
-                    "humanoid {i}: non-finite state (MuJoCo reset: {mujoco_reset})"
-                )))
+                Err(PhysicsError::diverged(
+                    BackendKind::Mujoco,
+                    self.tick,
+                    format!("humanoid {i}: non-finite state (MuJoCo reset: {mujoco_reset})"),
+                ))
             }
             None => Ok(()),
         }
     }
 
     fn humanoid_state(&self, index: usize) -> Result<&HumanoidState, PhysicsError> {
-        self.check_index(index)?;
+        PhysicsError::check_index(index, self.layouts.len())?;
         Ok(&self.states[index])
     }
 

@@ -78,25 +78,6 @@ impl RapierBackend {
     fn read_state(&mut self, i: usize) {
         self.humanoids[i].read_state(&self.world, self.handles.terrain, &mut self.states[i]);
     }
-
-    fn check_index(&self, index: usize) -> Result<(), PhysicsError> {
-        if index < self.humanoids.len() {
-            Ok(())
-        } else {
-            Err(PhysicsError::NoSuchHumanoid {
-                index,
-                count: self.humanoids.len(),
-            })
-        }
-    }
-
-    fn diverged(&self, reason: String) -> PhysicsError {
-        PhysicsError::Diverged {
-            backend: BackendKind::Rapier,
-            tick: self.tick.0,
-            reason,
-        }
-    }
 }
 
 /// Where humanoid `i` stands when the world is created.
@@ -121,7 +102,7 @@ impl PhysicsBackend for RapierBackend {
     }
 
     fn reset_humanoid(&mut self, index: usize, pose: &HumanoidPose) -> Result<(), PhysicsError> {
-        self.check_index(index)?;
+        PhysicsError::check_index(index, self.humanoids.len())?;
         pose.validate()?;
         self.humanoids[index].remove(&mut self.world);
         self.humanoids[index] =
@@ -137,7 +118,7 @@ impl PhysicsBackend for RapierBackend {
         targets: &[f64],
         root_wrench: Option<RootWrench>,
     ) -> Result<(), PhysicsError> {
-        self.check_index(index)?;
+        PhysicsError::check_index(index, self.humanoids.len())?;
         let (targets, wrench) = sanitize_action(
             targets,
             root_wrench,
@@ -152,9 +133,7 @@ impl PhysicsBackend for RapierBackend {
 
     fn step(&mut self) -> Result<(), PhysicsError> {
         if self.diverged.iter().any(|d| *d) {
-            return Err(
-                self.diverged("a previous step diverged; reset every diverged humanoid".into())
-            );
+            return Err(PhysicsError::still_diverged(BackendKind::Rapier, self.tick));
         }
         let t_next = self.tick.advanced(1).seconds();
         world::drive_obstacles(&mut self.world, &self.scene, &self.handles, t_next);
@@ -167,7 +146,11 @@ impl PhysicsBackend for RapierBackend {
         self.tick = self.tick.advanced(1);
         if stepped.is_err() {
             self.diverged.iter_mut().for_each(|d| *d = true);
-            return Err(self.diverged("rapier panicked inside the step".into()));
+            return Err(PhysicsError::diverged(
+                BackendKind::Rapier,
+                self.tick,
+                "rapier panicked inside the step",
+            ));
         }
         for (o, ob) in self.obstacles.iter_mut().zip(&self.scene.dynamic) {
             *o = obstacle_pose(ob, t_next).0;
@@ -182,13 +165,17 @@ impl PhysicsBackend for RapierBackend {
             }
         }
         match bad {
-            Some(i) => Err(self.diverged(format!("humanoid {i} has a non-finite state"))),
+            Some(i) => Err(PhysicsError::diverged(
+                BackendKind::Rapier,
+                self.tick,
+                format!("humanoid {i} has a non-finite state"),
+            )),
             None => Ok(()),
         }
     }
 
     fn humanoid_state(&self, index: usize) -> Result<&HumanoidState, PhysicsError> {
-        self.check_index(index)?;
+        PhysicsError::check_index(index, self.humanoids.len())?;
         Ok(&self.states[index])
     }
 
