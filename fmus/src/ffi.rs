@@ -76,6 +76,16 @@ impl Component {
         }
     }
 
+    /// Refuse a call whose value array is null although `n > 0`.
+    fn null_array(&self, call: &str) -> fmi2Status {
+        self.log(
+            FMI2_ERROR,
+            "logStatusError",
+            &format!("{call}: null array with n > 0"),
+        );
+        FMI2_ERROR
+    }
+
     fn report(&mut self, result: Result<(), FmuError>) -> fmi2Status {
         match result {
             Ok(()) => FMI2_OK,
@@ -331,12 +341,7 @@ macro_rules! get_values {
                 let (Some(vrs), Some(out)) =
                     (unsafe { slice(vr, n) }, unsafe { slice_mut(value, n) })
                 else {
-                    comp.log(
-                        FMI2_ERROR,
-                        "logStatusError",
-                        concat!(stringify!($fn_name), ": null array with n > 0"),
-                    );
-                    return FMI2_ERROR;
+                    return comp.null_array(stringify!($fn_name));
                 };
                 let r = comp.instance.$method(vrs, out);
                 comp.report(r)
@@ -361,12 +366,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
         // SAFETY: FMI contract: both arrays hold n elements.
         let (Some(vrs), Some(out)) = (unsafe { slice(vr, n) }, unsafe { slice_mut(value, n) })
         else {
-            comp.log(
-                FMI2_ERROR,
-                "logStatusError",
-                "fmi2GetBoolean: null array with n > 0",
-            );
-            return FMI2_ERROR;
+            return comp.null_array("fmi2GetBoolean");
         };
         let mut tmp = vec![false; n];
         let r = comp.instance.get_boolean(vrs, &mut tmp);
@@ -391,12 +391,7 @@ pub unsafe extern "C" fn fmi2GetString(
         // SAFETY: FMI contract: both arrays hold n elements.
         let (Some(vrs), Some(out)) = (unsafe { slice(vr, n) }, unsafe { slice_mut(value, n) })
         else {
-            comp.log(
-                FMI2_ERROR,
-                "logStatusError",
-                "fmi2GetString: null array with n > 0",
-            );
-            return FMI2_ERROR;
+            return comp.null_array("fmi2GetString");
         };
         for (r, o) in vrs.iter().zip(out.iter_mut()) {
             match comp.instance.get_string(*r) {
@@ -420,12 +415,7 @@ pub unsafe extern "C" fn fmi2SetReal(
     with_component(c, |comp| {
         // SAFETY: FMI contract: both arrays hold n elements.
         let (Some(vrs), Some(vals)) = (unsafe { slice(vr, n) }, unsafe { slice(value, n) }) else {
-            comp.log(
-                FMI2_ERROR,
-                "logStatusError",
-                "fmi2SetReal: null array with n > 0",
-            );
-            return FMI2_ERROR;
+            return comp.null_array("fmi2SetReal");
         };
         let r = comp.instance.set_real(vrs, vals);
         comp.report(r)
@@ -444,12 +434,7 @@ pub unsafe extern "C" fn fmi2SetInteger(
     with_component(c, |comp| {
         // SAFETY: FMI contract: both arrays hold n elements.
         let (Some(vrs), Some(vals)) = (unsafe { slice(vr, n) }, unsafe { slice(value, n) }) else {
-            comp.log(
-                FMI2_ERROR,
-                "logStatusError",
-                "fmi2SetInteger: null array with n > 0",
-            );
-            return FMI2_ERROR;
+            return comp.null_array("fmi2SetInteger");
         };
         let r = comp.instance.set_integer(vrs, vals);
         comp.report(r)
@@ -468,12 +453,7 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     with_component(c, |comp| {
         // SAFETY: FMI contract: both arrays hold n elements.
         let (Some(vrs), Some(vals)) = (unsafe { slice(vr, n) }, unsafe { slice(value, n) }) else {
-            comp.log(
-                FMI2_ERROR,
-                "logStatusError",
-                "fmi2SetBoolean: null array with n > 0",
-            );
-            return FMI2_ERROR;
+            return comp.null_array("fmi2SetBoolean");
         };
         let vals: Vec<bool> = vals.iter().map(|b| *b != 0).collect();
         let r = comp.instance.set_boolean(vrs, &vals);
@@ -493,12 +473,7 @@ pub unsafe extern "C" fn fmi2SetString(
     with_component(c, |comp| {
         // SAFETY: FMI contract: both arrays hold n elements.
         let (Some(vrs), Some(vals)) = (unsafe { slice(vr, n) }, unsafe { slice(value, n) }) else {
-            comp.log(
-                FMI2_ERROR,
-                "logStatusError",
-                "fmi2SetString: null array with n > 0",
-            );
-            return FMI2_ERROR;
+            return comp.null_array("fmi2SetString");
         };
         for (r, v) in vrs.iter().zip(vals) {
             // SAFETY: each element is null or a valid string (FMI contract).
