@@ -13,13 +13,18 @@ use iceoryx2::prelude::*;
 use plamo_interfaces::{ComponentKind, RunId, ServiceNames};
 
 use crate::ipc::{
-    IpcError, IpcSettings, RemoteComponent, dead_nodes, end_run, remove_stale_resources, run_config,
+    IpcError, IpcSettings, RemoteComponent, StaleRun, clean_stale_runs, dead_nodes, end_run,
+    run_config,
 };
 use crate::lockstep::{Link, Links, RunError};
 use crate::spec::RunSpec;
 
 /// The orchestrator's iceoryx2 node name (components exit when it is gone).
 pub const ORCHESTRATOR_NODE: &str = crate::ipc::ORCHESTRATOR_NODE;
+
+/// A run with files but no node yet is younger than this is taken to be starting up,
+/// not stale.
+const STARTUP_GRACE: Duration = Duration::from_secs(10);
 
 /// How long stopped components get to exit before they are killed.
 const EXIT_GRACE: Duration = Duration::from_secs(2);
@@ -37,6 +42,8 @@ pub struct ProcessRun {
     cfg: Config,
     node: Option<Node<ipc::Service>>,
     children: Vec<(String, Arc<Mutex<Option<Child>>>)>,
+    /// Runs that had crashed earlier (any run id) whose files were removed at start.
+    pub cleaned: Vec<StaleRun>,
 }
 
 type Slot = Arc<Mutex<Option<Child>>>;
@@ -57,8 +64,8 @@ impl ProcessRun {
         physics_fault: Option<&str>,
     ) -> Result<(Self, Links), RunError> {
         let cfg = run_config(run)?;
-        // A crashed earlier run with this id may have left files behind.
-        remove_stale_resources(&cfg);
+        // Crashed earlier runs (this id or any other) may have left files behind.
+        let cleaned = clean_stale_runs(STARTUP_GRACE);
         let node = NodeBuilder::new()
             .name(&NodeName::new(ORCHESTRATOR_NODE).map_err(|e| RunError::Setup(format!("{e:?}")))?)
             .config(&cfg)
@@ -69,6 +76,7 @@ impl ProcessRun {
             cfg,
             node: None,
             children: Vec::new(),
+            cleaned,
         };
         let result = this.spawn_all(&node, spec, run, exe, settings, physics_fault);
         this.node = Some(node);
@@ -238,7 +246,6 @@ impl ProcessRun {
             }
         }
         drop(self.node.take());
-        remove_stale_resources(&self.cfg);
         // Every node of the run is gone now; the last file can go.
         let _ = end_run(&self.cfg);
         killed

@@ -120,33 +120,12 @@ fn end(run: &str, client: RemoteComponent<u64, u64>, orch: Node<ipc::Service>) {
     drop(orch);
     let cfg = run_config(&RunId::new(run).unwrap()).unwrap();
     end_run(&cfg).unwrap();
-    assert_eq!(
-        files_with_prefix(&format!("plamo-{run}-")),
-        Vec::<String>::new()
-    );
+    assert_eq!(files_of(run), Vec::<std::path::PathBuf>::new());
 }
 
-/// Files of a run left in iceoryx2's shared-memory and runtime directories.
-fn files_with_prefix(prefix: &str) -> Vec<String> {
-    let mut found = Vec::new();
-    let mut dirs = vec![
-        std::path::PathBuf::from("/dev/shm"),
-        std::path::PathBuf::from("/tmp/iceoryx2"),
-    ];
-    while let Some(dir) = dirs.pop() {
-        let Ok(entries) = std::fs::read_dir(&dir) else {
-            continue;
-        };
-        for e in entries.flatten() {
-            let path = e.path();
-            if path.is_dir() {
-                dirs.push(path);
-            } else if e.file_name().to_string_lossy().starts_with(prefix) {
-                found.push(path.display().to_string());
-            }
-        }
-    }
-    found
+/// Files of run `run` left in iceoryx2's shared-memory and runtime directories.
+fn files_of(run: &str) -> Vec<std::path::PathBuf> {
+    plamo::ipc::run_files(&RunId::new(run).unwrap())
 }
 
 #[test]
@@ -209,8 +188,5 @@ fn a_component_exits_when_its_orchestrator_is_gone() {
     assert!(matches!(err, IpcError::PeerDied { .. }), "{err}");
     let cfg = run_config(&RunId::new("ipc-test-orphan").unwrap()).unwrap();
     end_run(&cfg).unwrap();
-    assert_eq!(
-        files_with_prefix("plamo-ipc-test-orphan-"),
-        Vec::<String>::new()
-    );
+    assert_eq!(files_of("ipc-test-orphan"), Vec::<String>::new());
 }

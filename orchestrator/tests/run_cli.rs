@@ -46,24 +46,8 @@ fn digest(o: &Output) -> String {
 }
 
 /// Files of run `run` left in iceoryx2's shared-memory and runtime directories.
-fn leftovers(run: &str) -> Vec<String> {
-    let prefix = format!("plamo-{run}-");
-    let mut found = Vec::new();
-    let mut dirs = vec![PathBuf::from("/dev/shm"), PathBuf::from("/tmp/iceoryx2")];
-    while let Some(dir) = dirs.pop() {
-        let Ok(entries) = std::fs::read_dir(&dir) else {
-            continue;
-        };
-        for e in entries.flatten() {
-            let path = e.path();
-            if path.is_dir() {
-                dirs.push(path);
-            } else if e.file_name().to_string_lossy().starts_with(&prefix) {
-                found.push(path.display().to_string());
-            }
-        }
-    }
-    found
+fn leftovers(run: &str) -> Vec<PathBuf> {
+    plamo::ipc::run_files(&plamo_interfaces::RunId::new(run).unwrap())
 }
 
 /// Pids of the component processes of run `run` (from /proc).
@@ -128,7 +112,7 @@ fn in_process_and_multi_process_runs_are_bit_identical() {
         );
     }
     assert!(a.join("run.png").exists() && a.join("plans.json").exists());
-    assert_eq!(leftovers("cli-test-det"), Vec::<String>::new());
+    assert_eq!(leftovers("cli-test-det"), Vec::<PathBuf>::new());
     // Another seed changes the start heading, so the trajectory.
     let c = out_dir("seed");
     let oc = run_ok(
@@ -164,7 +148,7 @@ fn two_agents_with_their_own_instructions_run_in_both_modes() {
     );
     let text = String::from_utf8_lossy(&oa.stdout);
     assert!(text.contains("agent 1"), "{text}");
-    assert_eq!(leftovers("cli-test-two"), Vec::<String>::new());
+    assert_eq!(leftovers("cli-test-two"), Vec::<PathBuf>::new());
 }
 
 #[test]
@@ -211,7 +195,7 @@ fn a_sigkilled_component_stops_the_run_and_leaves_no_files() {
     assert!(err.contains("physics") && err.contains("died"), "{err}");
     assert!(err.contains("tick"), "{err}");
     assert_eq!(component_pids(run), vec![], "components left running");
-    assert_eq!(leftovers(run), Vec::<String>::new());
+    assert_eq!(leftovers(run), Vec::<PathBuf>::new());
 }
 
 #[test]
@@ -236,7 +220,7 @@ fn a_crashing_component_is_named_with_its_tick() {
         err.contains("physics died") && err.contains("tick 40"),
         "{err}"
     );
-    assert_eq!(leftovers(run), Vec::<String>::new());
+    assert_eq!(leftovers(run), Vec::<PathBuf>::new());
 }
 
 #[test]
@@ -262,7 +246,7 @@ fn a_wrong_tick_is_an_error() {
         "{err}"
     );
     assert_eq!(component_pids(run), vec![]);
-    assert_eq!(leftovers(run), Vec::<String>::new());
+    assert_eq!(leftovers(run), Vec::<PathBuf>::new());
 }
 
 #[test]
@@ -315,7 +299,7 @@ fn components_exit_when_the_orchestrator_is_killed() {
         &out_dir("orphan-after"),
     );
     assert!(!digest(&o).is_empty());
-    assert_eq!(leftovers(run), Vec::<String>::new());
+    assert_eq!(leftovers(run), Vec::<PathBuf>::new());
 }
 
 #[test]
@@ -354,8 +338,8 @@ fn concurrent_runs_are_isolated() {
     assert_eq!(digest(&oa), digest(&ra));
     assert_eq!(digest(&ob), digest(&rb));
     assert_ne!(digest(&oa), digest(&ob));
-    assert_eq!(leftovers("cli-test-conc-a"), Vec::<String>::new());
-    assert_eq!(leftovers("cli-test-conc-b"), Vec::<String>::new());
+    assert_eq!(leftovers("cli-test-conc-a"), Vec::<PathBuf>::new());
+    assert_eq!(leftovers("cli-test-conc-b"), Vec::<PathBuf>::new());
 }
 
 #[cfg(not(feature = "mujoco"))]
@@ -367,4 +351,122 @@ fn mujoco_without_the_feature_names_the_feature() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(err.contains("`mujoco` feature"), "{err}");
+}
+
+#[test]
+fn the_next_run_removes_what_a_crashed_run_of_another_id_left() {
+    let run = "cli-test-crashed";
+    let mut orch = plamo(&[
+        "--instructions",
+        ROUTE,
+        "--max-seconds",
+        "600",
+        "--processes",
+        "--run",
+        run,
+    ])
+    .stdout(Stdio::null())
+    .stderr(Stdio::null())
+    .spawn()
+    .unwrap();
+    let start = Instant::now();
+    while component_pids(run).len() < 3 {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "components did not start"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    // The whole run dies at once (a power cut, `kill -9` of the process group):
+    // nobody is left to tidy up.
+    let mut pids: Vec<String> = component_pids(run)
+        .iter()
+        .map(|(p, _)| p.to_string())
+        .collect();
+    pids.push(orch.id().to_string());
+    assert!(
+        Command::new("kill")
+            .arg("-9")
+            .args(&pids)
+            .status()
+            .unwrap()
+            .success()
+    );
+    orch.wait().unwrap();
+    assert!(
+        !leftovers(run).is_empty(),
+        "the crash left nothing to clean"
+    );
+    let o = run_ok(
+        &[
+            "--instructions",
+            ROUTE,
+            "--max-seconds",
+            "1",
+            "--processes",
+            "--run",
+            "cli-test-after-crashed",
+        ],
+        &out_dir("after-crashed"),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("crashed run `cli-test-crashed`"), "{err}");
+    assert_eq!(leftovers(run), Vec::<PathBuf>::new());
+    assert_eq!(leftovers("cli-test-after-crashed"), Vec::<PathBuf>::new());
+}
+
+/// Simulated seconds and loop wall seconds from a run's summary.
+fn sim_and_loop_seconds(o: &Output) -> (f64, f64) {
+    let text = String::from_utf8_lossy(&o.stdout);
+    let sim = text
+        .split("after ")
+        .nth(1)
+        .and_then(|r| r.split(" s simulated").next())
+        .and_then(|v| v.parse().ok())
+        .expect("simulated seconds");
+    let lp = text
+        .split("loop ")
+        .nth(1)
+        .and_then(|r| r.split(" s)").next())
+        .and_then(|v| v.parse().ok())
+        .expect("loop seconds");
+    (sim, lp)
+}
+
+#[test]
+fn realtime_pacing_changes_the_wall_clock_only() {
+    let args = [
+        "--instructions",
+        ROUTE,
+        "--max-seconds",
+        "1.5",
+        "--seed",
+        "3",
+    ];
+    let (a, b) = (out_dir("paced"), out_dir("unpaced"));
+    let mut paced = args.to_vec();
+    paced.push("--realtime");
+    let op = run_ok(&paced, &a);
+    let ou = run_ok(&args, &b);
+    assert_eq!(digest(&op), digest(&ou));
+    for f in ["trajectory.csv", "obstacles.csv", "metrics.json"] {
+        assert_eq!(
+            std::fs::read(a.join(f)).unwrap(),
+            std::fs::read(b.join(f)).unwrap(),
+            "{f} differs"
+        );
+    }
+    let text = String::from_utf8_lossy(&op.stdout);
+    assert!(
+        text.contains("real time") && text.contains("late tick(s)"),
+        "{text}"
+    );
+    // Pacing sleeps until each tick is due, so the loop cannot end before the
+    // simulated time has passed on the wall clock (a bound, not a timing).
+    let (sim, lp) = sim_and_loop_seconds(&op);
+    assert!(
+        sim >= 1.5 && lp >= sim - 1.0 / 30.0,
+        "sim {sim} s, loop {lp} s"
+    );
 }

@@ -173,6 +173,12 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
             IpcSettings::default(),
             args.inject_fault.as_deref(),
         )?;
+        for stale in &procs.cleaned {
+            eprintln!(
+                "removed {} stale shared-memory file(s) of crashed run `{}`",
+                stale.files, stale.run
+            );
+        }
         (links, Some(procs))
     } else {
         (spec.in_process(&scene)?, None)

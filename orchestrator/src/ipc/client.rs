@@ -99,8 +99,13 @@ where
         self.channels
             .send(Envelope::new(EnvelopeKind::Data, tick, *input))?;
         let start = Instant::now();
+        let mut polled = self.channels.poll_within(self.settings.poll)?;
         loop {
-            match self.channels.receive_within(self.settings.slice)? {
+            let received = match polled.take() {
+                Some(frame) => Some(frame),
+                None => self.channels.receive_within(self.settings.slice)?,
+            };
+            match received {
                 Some(frame) => match frame.kind() {
                     Some(EnvelopeKind::Ready) => continue,
                     Some(EnvelopeKind::Data) if frame.tick == tick => return Ok(frame.payload),

@@ -13,10 +13,12 @@ mod error;
 mod liveness;
 mod server;
 mod setup;
+mod stale;
 
 pub use client::RemoteComponent;
 pub use envelope::{Envelope, EnvelopeKind};
 pub use error::IpcError;
 pub use liveness::{NodeRole, dead_nodes, end_run, remove_stale_resources};
 pub use server::{ORCHESTRATOR_NODE, serve};
-pub use setup::{Channels, IpcSettings, run_config};
+pub use setup::{Channels, FILE_PREFIX, IpcSettings, run_config};
+pub use stale::{StaleRun, clean_stale_runs, run_files};

@@ -18,6 +18,11 @@ pub const ORCHESTRATOR_NODE: &str = "plamo-orchestrator";
 /// Tick value of the ready handshake frame (no real tick reaches it).
 pub const READY_TICK: u64 = u64::MAX;
 
+/// A busy component looks for a termination request (SIGTERM/SIGINT) every this
+/// many requests, an idle one every wait slice: `Node::wait` is a nanosleep, too
+/// costly to pay on every request of a fast lockstep.
+const TERMINATION_EVERY: u64 = 64;
+
 /// How often an idle component looks for its orchestrator.
 const LIVENESS_EVERY: u32 = 4;
 
@@ -63,10 +68,10 @@ where
     let mut idle_slices = 0u32;
     ch.signal(EnvelopeKind::Ready, READY_TICK)?;
     loop {
-        if node.wait(Duration::ZERO).is_err() {
-            return Err(IpcError::Shutdown);
-        }
         let Some(frame) = ch.receive_within(settings.slice)? else {
+            if node.wait(Duration::ZERO).is_err() {
+                return Err(IpcError::Shutdown);
+            }
             if served == 0 {
                 ch.signal(EnvelopeKind::Ready, READY_TICK)?;
             }
@@ -81,6 +86,9 @@ where
             continue;
         };
         idle_slices = 0;
+        if served.is_multiple_of(TERMINATION_EVERY) && node.wait(Duration::ZERO).is_err() {
+            return Err(IpcError::Shutdown);
+        }
         match frame.kind() {
             Some(EnvelopeKind::Data) => {
                 let mut out = C::Output::default();

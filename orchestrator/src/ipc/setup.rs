@@ -18,6 +18,12 @@ use super::error::{IpcError, setup};
 pub struct IpcSettings {
     /// Length of one wait before liveness is checked again \[s\] (default 0.05 s).
     pub slice: Duration,
+    /// How long the orchestrator polls for a reply before it blocks on the peer's
+    /// wake-up event \[s\] (default 0.5 ms). In lockstep only one component computes
+    /// at a time, so polling costs one core that would idle anyway and saves the
+    /// scheduler's wake-up latency (tens of us) on every call; a reply slower than
+    /// this is waited for by blocking. Zero disables polling. Never changes results.
+    pub poll: Duration,
     /// How long a component may take to come up and say it is ready (default 30 s).
     pub ready_timeout: Duration,
     /// How long one step may take before the component is declared hung (default 60 s).
@@ -28,17 +34,22 @@ impl Default for IpcSettings {
     fn default() -> Self {
         Self {
             slice: Duration::from_millis(50),
+            poll: Duration::from_micros(500),
             ready_timeout: Duration::from_secs(30),
             call_timeout: Duration::from_secs(60),
         }
     }
 }
 
+/// Start of every file name plamo's runs leave under /dev/shm and the iceoryx2 root.
+pub const FILE_PREFIX: &str = "plamo_";
+
 /// An iceoryx2 configuration whose file prefix isolates this run: two runs on one
-/// machine never open each other's shared memory.
+/// machine never open each other's shared memory. The prefix is `plamo_<run id>_`;
+/// `_` cannot occur in a run id, so a file name tells which run it belongs to.
 pub fn run_config(run: &RunId) -> Result<Config, IpcError> {
     let mut cfg = Config::default();
-    let prefix = format!("plamo-{run}-");
+    let prefix = format!("{FILE_PREFIX}{run}_");
     cfg.global.prefix =
         FileName::new(prefix.as_bytes()).map_err(setup(format!("prefix {prefix}")))?;
     Ok(cfg)
@@ -142,6 +153,20 @@ where
             .receive()
             .map_err(setup("receive"))?
             .map(|s| *s))
+    }
+
+    /// Poll for the next frame for up to `poll`, without blocking.
+    pub fn poll_within(&self, poll: Duration) -> Result<Option<Envelope<Rx>>, IpcError> {
+        let start = std::time::Instant::now();
+        loop {
+            if let Some(frame) = self.try_receive()? {
+                return Ok(Some(frame));
+            }
+            if start.elapsed() >= poll {
+                return Ok(None);
+            }
+            std::hint::spin_loop();
+        }
     }
 
     /// Wait up to `slice` for the peer's wake-up, then take the next frame, if any.
