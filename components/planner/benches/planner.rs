@@ -1,5 +1,7 @@
 //! Planner benchmarks, each next to a baseline measured in the same run:
-//! A* vs the `pathfinding` crate's astar on the same graph, the connectivity check
+//! A* (with and without the per-grid ALT landmark bounds, whose precomputation is
+//! a group of its own) vs the `pathfinding` crate's astar on the same graph, the
+//! same on 20 interior start/goal pairs, the connectivity check
 //! vs an exhaustive A* for an unreachable target, the QP vs the forward-backward
 //! oracle, a full 4-instruction plan on the playground, and a dynamic re-plan.
 //!
@@ -10,14 +12,17 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use plamo_planner::synthetic::{ball_scene, hills_scene};
 use plamo_planner::{
-    AStar, Components, Heuristic, PlanGrid, Planner, PlannerSettings, Prediction, SearchLimits,
-    SpeedProblem, forward_backward, predict_conflict, solve_speed_qp, solve_speed_socp,
+    AStar, AltLandmarks, Components, Heuristic, PlanGrid, Planner, PlannerSettings, Prediction,
+    SearchLimits, SpeedProblem, forward_backward, predict_conflict, solve_speed_qp,
+    solve_speed_socp,
 };
 use plamo_scenes::{Footprint, Wall, builtin};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 const MIN_HEAD: f32 = 0.5;
+/// Landmarks of the ALT bound in the A* benches.
+const ALT_K: usize = 8;
 
 fn hills() -> (plamo_scenes::Scene, PlanGrid, usize, Vec<usize>) {
     let scene = hills_scene(1000, 3.0);
@@ -36,8 +41,19 @@ fn bench_astar(c: &mut Criterion) {
     let (_scene, grid, start, goals) = hills();
     let mut astar = AStar::default();
     let limits = SearchLimits::default();
+    let alt = AltLandmarks::build(&grid, ALT_K);
     let mut g = c.benchmark_group("astar_1000x1000_hills");
     g.sample_size(20);
+    g.bench_function("plamo_astar_alt8", |b| {
+        b.iter(|| {
+            black_box(
+                astar
+                    .search_with(&grid, start, &goals, MIN_HEAD, &limits, Some(&alt))
+                    .unwrap(),
+            )
+        })
+    });
+    eprintln!("plamo_astar_alt8: {} expansions", astar.expanded);
     g.bench_function("plamo_astar", |b| {
         b.iter(|| {
             black_box(
@@ -47,6 +63,7 @@ fn bench_astar(c: &mut Criterion) {
             )
         })
     });
+    eprintln!("plamo_astar: {} expansions", astar.expanded);
     // Baseline: pathfinding::astar on the same edges, costs in micrometres (it needs
     // an Ord cost), same heuristic (octile distance + height difference to the goals).
     let heur = Heuristic::new(&grid, &goals).unwrap();
@@ -71,6 +88,46 @@ fn bench_astar(c: &mut Criterion) {
             black_box(r.unwrap())
         })
     });
+    g.finish();
+}
+
+/// The precomputation ALT needs, once per grid (not part of any query above).
+fn bench_alt_build(c: &mut Criterion) {
+    let (_scene, grid, _, _) = hills();
+    let mut g = c.benchmark_group("alt_landmarks_build_1000x1000");
+    g.sample_size(10);
+    g.bench_function("alt8_build_per_grid", |b| {
+        b.iter(|| black_box(AltLandmarks::build(&grid, ALT_K)))
+    });
+    g.finish();
+}
+
+/// 20 fixed start/goal pairs inside the hills grid (at least 10 m from its rim,
+/// where the landmarks are): the ALT bound is far looser than for the corner-to-
+/// corner query, the harder case for it. One iteration = the 20 searches.
+fn bench_astar_interior(c: &mut Criterion) {
+    let (_scene, grid, _, _) = hills();
+    let alt = AltLandmarks::build(&grid, ALT_K);
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let mut cell = || {
+        let i = rng.random_range(100..900);
+        let j = rng.random_range(100..900);
+        j * grid.nx + i
+    };
+    let pairs: Vec<(usize, usize)> = (0..20).map(|_| (cell(), cell())).collect();
+    let mut astar = AStar::default();
+    let limits = SearchLimits::default();
+    let mut g = c.benchmark_group("astar_1000x1000_hills_20_interior_pairs");
+    g.sample_size(10);
+    for (name, a) in [("plamo_astar_alt8", Some(&alt)), ("plamo_astar", None)] {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                for &(s, t) in &pairs {
+                    black_box(astar.search_with(&grid, s, &[t], MIN_HEAD, &limits, a));
+                }
+            })
+        });
+    }
     g.finish();
 }
 
@@ -218,6 +275,8 @@ fn bench_replan(c: &mut Criterion) {
 criterion_group!(
     benches,
     bench_astar,
+    bench_alt_build,
+    bench_astar_interior,
     bench_unreachable,
     bench_speed,
     bench_full_plan,

@@ -1,5 +1,6 @@
 //! Stage 2: A* on the 8-connected planning grid, goal = the nearest cell of a set.
 
+use crate::alt::AltLandmarks;
 use crate::grid::{DIRS, PlanGrid};
 
 /// Cells A* must not enter (dynamic obstacles at their predicted positions) and an
@@ -152,6 +153,22 @@ impl AStar {
         min_head: f32,
         limits: &SearchLimits,
     ) -> Option<GridPath> {
+        self.search_with(g, start, goals, min_head, limits, None)
+    }
+
+    /// [`Self::search`], with the bound also raised to the landmarks' (ALT) bound
+    /// where `alt` is given and was built for `g` (otherwise it is not used). The
+    /// path's cost is the same cheapest cost; among equally cheap paths the one found
+    /// may differ from [`Self::search`]'s.
+    pub fn search_with(
+        &mut self,
+        g: &PlanGrid,
+        start: usize,
+        goals: &[usize],
+        min_head: f32,
+        limits: &SearchLimits,
+        alt: Option<&AltLandmarks>,
+    ) -> Option<GridPath> {
         let n = g.len();
         if self.node.len() != n {
             self.node = vec![Node::default(); n];
@@ -184,10 +201,16 @@ impl AStar {
         if start >= n {
             return None;
         }
+        let alt = alt
+            .filter(|a| a.fits(g) && !a.is_empty())
+            .map(|a| a.query(start, goals));
         let offsets: [isize; 8] = std::array::from_fn(|d| g.offset(d));
         let nx = g.nx;
         self.heap.clear();
-        let h0 = heur.at_cell(g, start);
+        let mut h0 = heur.at_cell(g, start);
+        if let Some(a) = &alt {
+            h0 = h0.max(a.at(start));
+        }
         self.node[start] = Node {
             g: 0.0,
             stamp: open,
@@ -214,20 +237,25 @@ impl AStar {
                 // A finite cost implies the neighbour is on the grid.
                 let b = c.wrapping_add_signed(offsets[d]);
                 let nb = &mut self.node[b];
-                if nb.stamp == closed {
+                let gb = gc + w as f64;
+                // A closed cell is re-opened when reached cheaper: the ALT bound
+                // is admissible but, through the f32 rounding of its distances,
+                // consistent only to a few micrometres (never for `Heuristic`).
+                if nb.stamp == closed && gb >= nb.g {
                     continue;
                 }
                 if g.has_tops && g.edge_for(c, d, min_head).is_none() {
                     continue;
                 }
-                let gb = gc + w as f64;
-                if nb.stamp == open {
+                if nb.stamp == open || nb.stamp == closed {
                     if gb >= nb.g {
                         continue;
                     }
                 } else if !limits.allows(g, b) {
-                    // Mark as closed so the check runs once per search.
+                    // Closed at -inf so the check runs once per search and the
+                    // cell is never re-opened.
                     nb.stamp = closed;
+                    nb.g = f64::NEG_INFINITY;
                     continue;
                 }
                 if nb.stamp != open {
@@ -237,11 +265,14 @@ impl AStar {
                 nb.g = gb;
                 self.parent_dir[b] = d as u8;
                 let (di, dj) = DIRS[d];
-                let hb = heur.at(
+                let mut hb = heur.at(
                     ci.wrapping_add_signed(di),
                     cj.wrapping_add_signed(dj),
                     g.height[b],
                 );
+                if let Some(a) = &alt {
+                    hb = hb.max(a.at(b));
+                }
                 self.heap
                     .push_or_decrease((gb + hb).to_bits(), b as u32, &mut self.node);
             }
@@ -353,18 +384,29 @@ mod tests {
     use std::cmp::Reverse;
     use std::collections::BinaryHeap;
 
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
     use super::*;
     use crate::PlannerSettings;
     use crate::synthetic::{flat_scene, hills_scene, pyramid_scene};
 
     /// Cost to the nearest goal from every cell: multi-source Dijkstra from the goals
-    /// (the graph is symmetric), the reference A* must match.
-    fn dijkstra_to(g: &PlanGrid, goals: &[usize], min_head: f32) -> Vec<f64> {
+    /// (the graph is symmetric) over cells `limits` allows, the reference A* must
+    /// match.
+    fn dijkstra_to(
+        g: &PlanGrid,
+        goals: &[usize],
+        min_head: f32,
+        limits: &SearchLimits,
+    ) -> Vec<f64> {
         let mut dist = vec![f64::INFINITY; g.len()];
         let mut heap = BinaryHeap::new();
         for &c in goals {
-            dist[c] = 0.0;
-            heap.push(Reverse((0u64, c)));
+            if limits.allows(g, c) {
+                dist[c] = 0.0;
+                heap.push(Reverse((0u64, c)));
+            }
         }
         while let Some(Reverse((k, c))) = heap.pop() {
             if f64::from_bits(k) > dist[c] {
@@ -373,7 +415,7 @@ mod tests {
             for d in 0..8 {
                 if let Some((b, w)) = g.edge_for(c, d, min_head) {
                     let nb = dist[c] + w as f64;
-                    if nb < dist[b] {
+                    if nb < dist[b] && limits.allows(g, b) {
                         dist[b] = nb;
                         heap.push(Reverse((nb.to_bits(), b)));
                     }
@@ -383,23 +425,83 @@ mod tests {
         dist
     }
 
-    fn check_exact(scene: &plamo_scenes::Scene, s: &PlannerSettings, goal: &str, min_head: f32) {
-        let g = PlanGrid::build(scene, s);
-        let goals: Vec<usize> = scene
+    fn landmark_goals(
+        scene: &plamo_scenes::Scene,
+        g: &PlanGrid,
+        goal: &str,
+        min_head: f32,
+    ) -> Vec<usize> {
+        scene
             .landmark_cells(scene.landmark(goal).unwrap())
             .into_iter()
             .map(|(i, j)| j * g.nx + i)
             .filter(|&c| g.passable(c, min_head))
-            .collect();
-        let dist = dijkstra_to(&g, &goals, min_head);
-        let heur = Heuristic::new(&g, &goals).unwrap();
-        let mut astar = AStar::default();
+            .collect()
+    }
+
+    /// A* from `start` (with and, when given, without landmarks) against the
+    /// Dijkstra cost `dc`; returns whether a path was checked.
+    #[allow(clippy::too_many_arguments)]
+    fn check_start(
+        g: &PlanGrid,
+        astar: &mut AStar,
+        alt: Option<&AltLandmarks>,
+        start: usize,
+        goals: &[usize],
+        min_head: f32,
+        limits: &SearchLimits,
+        dc: f64,
+    ) -> bool {
+        let mut found_any = false;
+        for a in [None, alt] {
+            match astar.search_with(g, start, goals, min_head, limits, a) {
+                Some(p) => {
+                    let cost = *p.cost_to.last().unwrap();
+                    assert!(
+                        (cost - dc).abs() <= 1e-9 * dc.max(1.0),
+                        "start {start}, landmarks {}: A* {cost} vs Dijkstra {dc}",
+                        a.is_some()
+                    );
+                    assert!(goals.contains(p.cells.last().unwrap()));
+                    // The path is made of edges A* may use and its costs add up.
+                    for (k, w) in p.cells.windows(2).enumerate() {
+                        let d = (0..8)
+                            .find(|&d| {
+                                g.edge_for(w[0], d, min_head)
+                                    .is_some_and(|(b, _)| b == w[1])
+                            })
+                            .expect("path steps along passable edges");
+                        let (_, wc) = g.edge_for(w[0], d, min_head).unwrap();
+                        assert_eq!(p.cost_to[k + 1], p.cost_to[k] + wc as f64);
+                        assert!(limits.allows(g, w[1]));
+                    }
+                    found_any = true;
+                }
+                None => assert!(
+                    dc.is_infinite(),
+                    "start {start}: A* found nothing, Dijkstra {dc}"
+                ),
+            }
+        }
+        found_any
+    }
+
+    fn check_exact(scene: &plamo_scenes::Scene, s: &PlannerSettings, goal: &str, min_head: f32) {
+        let g = PlanGrid::build(scene, s);
+        let goals = landmark_goals(scene, &g, goal, min_head);
         let limits = SearchLimits::default();
+        let dist = dijkstra_to(&g, &goals, min_head, &limits);
+        let heur = Heuristic::new(&g, &goals).unwrap();
+        let alt = AltLandmarks::build(&g, 6);
+        let mut astar = AStar::default();
         let mut checked = 0;
         for (c, &dc) in dist.iter().enumerate() {
             let h = heur.at_cell(&g, c);
             if dc.is_finite() {
                 assert!(h <= dc, "inadmissible at {c}: {h} > {dc}");
+                // The landmark bound, with the landmarks a query from `c` picks.
+                let ha = alt.query(c, &goals).at(c);
+                assert!(ha <= dc, "landmark bound inadmissible at {c}: {ha} > {dc}");
             }
             for d in 0..8 {
                 if let Some((b, w)) = g.edge_for(c, d, min_head) {
@@ -408,23 +510,199 @@ mod tests {
                 }
             }
             // A* from a spread of starts.
-            if c % 197 == 0 && g.passable(c, min_head) {
-                let found = astar.search(&g, c, &goals, min_head, &limits);
-                match found {
-                    Some(p) => {
-                        let cost = *p.cost_to.last().unwrap();
-                        assert!(
-                            (cost - dc).abs() <= 1e-9 * dc.max(1.0),
-                            "start {c}: A* {cost} vs Dijkstra {dc}"
-                        );
-                        assert!(goals.contains(p.cells.last().unwrap()));
-                        checked += 1;
-                    }
-                    None => assert!(dc.is_infinite(), "start {c}: A* found nothing"),
-                }
+            if c % 197 == 0
+                && g.passable(c, min_head)
+                && check_start(&g, &mut astar, Some(&alt), c, &goals, min_head, &limits, dc)
+            {
+                checked += 1;
             }
         }
         assert!(checked > 10, "only {checked} starts checked");
+    }
+
+    /// A random scene: rough hills with sharp steps (removed edges), walls, low
+    /// ceilings, and a goal landmark of random size.
+    fn random_scene(rng: &mut ChaCha8Rng) -> plamo_scenes::Scene {
+        use plamo_scenes::{Footprint, HeightGrid, Landmark, Region, Scene, TopObstacle, Wall};
+        let (w, h) = (rng.random_range(4.0..9.0), rng.random_range(4.0..9.0));
+        let mut t = HeightGrid::flat([0.0, 0.0], [w, h], 0.1, 0.0);
+        let amp: f64 = rng.random_range(0.0..1.5);
+        let (fx, fy, ph): (f64, f64, f64) = (
+            rng.random_range(0.3..2.0),
+            rng.random_range(0.3..2.0),
+            rng.random_range(0.0..6.0),
+        );
+        let steps: Vec<([f64; 2], f64)> = (0..rng.random_range(0..4))
+            .map(|_| {
+                (
+                    [rng.random_range(0.0..w), rng.random_range(0.0..h)],
+                    rng.random_range(0.5..2.0),
+                )
+            })
+            .collect();
+        for j in 0..t.ny {
+            for i in 0..t.nx {
+                let [x, y] = t.position(i, j);
+                let mut z = amp * (x * fx + ph).sin() * (y * fy).cos();
+                for &(ctr, r) in &steps {
+                    if (x - ctr[0]).abs().max((y - ctr[1]).abs()) < r {
+                        z += 0.4;
+                    }
+                }
+                t.heights[j * t.nx + i] = z;
+            }
+        }
+        let boxes = |rng: &mut ChaCha8Rng| {
+            let c = [rng.random_range(0.0..w), rng.random_range(0.0..h)];
+            let half = [rng.random_range(0.1..1.5), rng.random_range(0.1..1.5)];
+            Footprint::axis_aligned(c, half)
+        };
+        let walls = (0..rng.random_range(0..4))
+            .map(|_| Wall {
+                name: "wall".into(),
+                footprint: boxes(rng),
+                z_min: -5.0,
+                z_max: 5.0,
+            })
+            .collect();
+        let tops = (0..rng.random_range(0..3))
+            .map(|_| {
+                let z = rng.random_range(0.3..2.5);
+                TopObstacle {
+                    name: "roof".into(),
+                    footprint: boxes(rng),
+                    z_bottom: z,
+                    z_top: z + 0.2,
+                }
+            })
+            .collect();
+        let goal = Landmark {
+            name: "goal".into(),
+            region: Region::Circle {
+                center: [
+                    rng.random_range(0.5..w - 0.5),
+                    rng.random_range(0.5..h - 0.5),
+                ],
+                radius: rng.random_range(0.05..1.0),
+            },
+        };
+        Scene {
+            name: "random".into(),
+            description: String::new(),
+            terrain: t,
+            walls,
+            dynamic: vec![],
+            tops,
+            landmarks: vec![goal],
+        }
+    }
+
+    #[test]
+    fn astar_with_and_without_landmarks_equals_dijkstra_on_random_grids() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut checked = 0;
+        for case in 0..24 {
+            let scene = random_scene(&mut rng);
+            let s = PlannerSettings {
+                slope_preference_c: [0.0, 0.5, 1.0, 4.0][case % 4],
+                ..PlannerSettings::default()
+            };
+            let min_head = [0.5f32, 0.9, 1.6][case % 3];
+            let g = PlanGrid::build(&scene, &s);
+            let goals = landmark_goals(&scene, &g, "goal", min_head);
+            if goals.is_empty() {
+                continue;
+            }
+            let alt = AltLandmarks::build(&g, 1 + case % 8);
+            let mut astar = AStar::default();
+            // Every third case also blocks a disc and bounds the search to a window.
+            let limits = if case % 3 == 2 {
+                let (nx, ny) = (g.nx, g.ny);
+                SearchLimits {
+                    blocked_discs: vec![[
+                        rng.random_range(0.0..nx as f64 * 0.1),
+                        rng.random_range(0.0..ny as f64 * 0.1),
+                        rng.random_range(0.2..1.5),
+                    ]],
+                    window: Some((
+                        rng.random_range(0..nx / 3),
+                        rng.random_range(0..ny / 3),
+                        rng.random_range(2 * nx / 3..nx),
+                        rng.random_range(2 * ny / 3..ny),
+                    )),
+                }
+            } else {
+                SearchLimits::default()
+            };
+            let dist = dijkstra_to(&g, &goals, min_head, &limits);
+            for _ in 0..25 {
+                let c = rng.random_range(0..g.len());
+                if g.passable(c, min_head)
+                    && limits.allows(&g, c)
+                    && check_start(
+                        &g,
+                        &mut astar,
+                        Some(&alt),
+                        c,
+                        &goals,
+                        min_head,
+                        &limits,
+                        dist[c],
+                    )
+                {
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 200, "only {checked} searches found a path");
+    }
+
+    #[test]
+    fn landmark_search_is_deterministic() {
+        let scene = hills_scene(120, 3.0);
+        let g = PlanGrid::build(&scene, &PlannerSettings::default());
+        let a1 = AltLandmarks::build(&g, 5);
+        let a2 = AltLandmarks::build(&g, 5);
+        assert_eq!(a1.cells, a2.cells);
+        let goals = landmark_goals(&scene, &g, "ne", 0.5);
+        let start = g.cell_of(2.0, 2.0).unwrap();
+        let limits = SearchLimits::default();
+        let p1 = AStar::default()
+            .search_with(&g, start, &goals, 0.5, &limits, Some(&a1))
+            .unwrap();
+        let mut reused = AStar::default();
+        reused.search(&g, g.cell_of(6.0, 1.0).unwrap(), &goals, 0.5, &limits);
+        let p2 = reused
+            .search_with(&g, start, &goals, 0.5, &limits, Some(&a2))
+            .unwrap();
+        assert_eq!(p1.cells, p2.cells);
+        assert_eq!(p1.cost_to, p2.cost_to);
+    }
+
+    #[test]
+    fn landmarks_cut_expansions_on_hills() {
+        // The point of the landmarks: far fewer cells expanded for the same cost.
+        let scene = hills_scene(300, 3.0);
+        let g = PlanGrid::build(&scene, &PlannerSettings::default());
+        let alt = AltLandmarks::build(&g, 8);
+        let goals = landmark_goals(&scene, &g, "ne", 0.5);
+        let start = g.cell_of(2.0, 2.0).unwrap();
+        let limits = SearchLimits::default();
+        let mut astar = AStar::default();
+        let plain = astar.search(&g, start, &goals, 0.5, &limits).unwrap();
+        let e_plain = astar.expanded;
+        let with = astar
+            .search_with(&g, start, &goals, 0.5, &limits, Some(&alt))
+            .unwrap();
+        let e_alt = astar.expanded;
+        assert!(
+            (plain.cost_to.last().unwrap() - with.cost_to.last().unwrap()).abs() < 1e-9,
+            "same cheapest cost"
+        );
+        assert!(
+            e_alt * 5 < e_plain,
+            "{e_alt} expansions with landmarks vs {e_plain} without"
+        );
     }
 
     #[test]

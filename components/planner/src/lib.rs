@@ -12,6 +12,7 @@
 //! Pure computation: no transport, no clocks, deterministic.
 #![warn(missing_docs)]
 
+mod alt;
 mod astar;
 mod component;
 mod connectivity;
@@ -27,6 +28,7 @@ mod speed_qp;
 pub mod synthetic;
 mod timing;
 
+pub use alt::{ALT_ACTIVE, AltLandmarks};
 pub use astar::{AStar, GridPath, Heuristic, SearchLimits};
 pub use component::{FLAG_FINISHED, FLAG_INFEASIBLE, FLAG_REPLANNED, PlannerComponent};
 pub use connectivity::{BLOCKED, Components};
