@@ -33,7 +33,9 @@ impl Value {
 
 /// The simulation behind an FMU. Reads parameters and inputs from `values`, writes
 /// outputs into it.
-pub trait Model: Send {
+/// Not `Send`: an instance lives on whichever thread the host calls it from, one call
+/// at a time (FMI 2.0 does not move instances between concurrent threads).
+pub trait Model {
     /// Advance the internal simulation to `t` seconds after the start time (it steps
     /// in its own fixed ticks; a `t` between ticks advances to the last tick at or
     /// before it) and write the outputs.

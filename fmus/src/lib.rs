@@ -1,7 +1,8 @@
 //! PlaMo as FMI 2.0 co-simulation FMUs.
 //!
 //! One shared library serves every FMU of the project; fmi2Instantiate picks the
-//! model by GUID. `plamo-planner.fmu` wraps the planner alone. The variable table of
+//! model by GUID. `plamo.fmu` runs the whole humanoid (planner, controller and
+//! physics in the orchestrator's lockstep); `plamo-planner.fmu` wraps the planner alone. The variable table of
 //! each model ([`spec::ModelSpec`]) is the single source of its `modelDescription.xml`
 //! and of the get/set dispatch, and the library can describe itself
 //! ([`plamo_fmu_model_description`]) so the packager writes exactly what the binary
@@ -9,6 +10,7 @@
 #![warn(missing_docs)]
 
 mod ffi;
+pub mod humanoid_model;
 pub mod instance;
 pub mod models;
 mod planner_model;
@@ -17,9 +19,10 @@ pub mod spec;
 use std::ffi::{CString, c_char};
 use std::sync::OnceLock;
 
+pub use humanoid_model::GUID as HUMANOID_GUID;
 pub use planner_model::{GUID as PLANNER_GUID, resolve_scene};
 
-/// The model description of the FMU at `index` (0 = planner), or null past the end.
+/// The model description of the FMU at `index` (0 = planner, 1 = humanoid), or null past the end.
 /// Not part of FMI: the packager calls it to write `modelDescription.xml`. The text
 /// lives as long as the library.
 #[unsafe(no_mangle)]

@@ -99,6 +99,21 @@ impl Variable {
         }
     }
 
+    /// An input of any type starting at `start`.
+    pub fn input(
+        name: impl Into<String>,
+        ty: VarType,
+        start: impl Into<String>,
+        unit: Option<&'static str>,
+        description: impl Into<String>,
+    ) -> Self {
+        Self {
+            start: Some(start.into()),
+            unit,
+            ..Self::new(name, ty, Causality::Input, description)
+        }
+    }
+
     /// An output.
     pub fn output(
         name: impl Into<String>,

@@ -13,6 +13,7 @@ mod actuate;
 mod control;
 mod digest;
 mod error;
+pub mod external;
 mod link;
 mod plan;
 mod sense;
@@ -21,8 +22,8 @@ use std::time::{Duration, Instant};
 
 use plamo_controller::ControllerSettings;
 use plamo_interfaces::{
-    AgentAction, ControllerInput, PHYSICS_STEPS_PER_CONTROL, PhysicsInput, PhysicsOutput,
-    PlanMessage, Tick,
+    AgentAction, ControllerInput, MAX_OBSTACLES, ObstacleSample, PHYSICS_STEPS_PER_CONTROL,
+    PhysicsInput, PhysicsOutput, PlanMessage, Tick,
 };
 use plamo_scenes::Scene;
 
@@ -171,6 +172,31 @@ impl Lockstep {
         self.times.steps.push(secs(t0));
         self.digest.add(&self.world);
         Ok(StepStatus::Running)
+    }
+
+    /// Drive external obstacles (an FMU host's ball or car) from now on: the planners
+    /// see these states at the current tick (after the scene's obstacles, matching
+    /// the extra entries of [`external::planner_scene`]), physics carries them through
+    /// the coming control period and reports them at the next tick. They stay until
+    /// set again. Refuses non-finite numbers and more than fit in a world.
+    pub fn set_external_obstacles(&mut self, obstacles: &[ObstacleSample]) -> Result<(), RunError> {
+        let own = self.scene.dynamic.len().min(MAX_OBSTACLES);
+        external::check(own, obstacles)?;
+        let n = obstacles.len();
+        self.input.external_count = n as u32;
+        self.input.external_obstacles[..n].copy_from_slice(obstacles);
+        self.world.obstacles[own..own + n].copy_from_slice(obstacles);
+        self.world.obstacle_count = (own + n) as u32;
+        Ok(())
+    }
+
+    /// Agent `k`'s horizontal distance from where its plan wanted its head at the last
+    /// control step \[m\] (the XY error of the tracking metrics; 0 before the first
+    /// step and after the last instruction).
+    pub fn xy_error(&self, k: usize) -> f64 {
+        self.trackers
+            .get(k)
+            .map_or(0.0, AgentTracker::last_xy_error)
     }
 
     /// The world as physics last reported it.

@@ -49,6 +49,7 @@ pub(crate) struct AgentTracker {
     start_head: Option<[f64; 3]>,
     steps: usize,
     done: bool,
+    last_xy_error: f64,
 }
 
 struct Track {
@@ -93,12 +94,18 @@ impl AgentTracker {
             start_head: None,
             steps: 0,
             done: false,
+            last_xy_error: 0.0,
         }
     }
 
     /// Whether the agent finished every instruction.
     pub(crate) fn done(&self) -> bool {
         self.done
+    }
+
+    /// The head's horizontal distance from its target at the last recorded step \[m\].
+    pub(crate) fn last_xy_error(&self) -> f64 {
+        self.last_xy_error
     }
 
     /// Whether the humanoid has fallen for the posture `plan` asks for.
@@ -149,6 +156,7 @@ impl AgentTracker {
             self.first_waypoints.pop_front().unwrap_or(w0)
         };
         self.steps += 1;
+        self.last_xy_error = ((target[0] - head[0]).powi(2) + (target[1] - head[1]).powi(2)).sqrt();
         let yaw = heading(s.root_orientation);
         let max_other = s.body_positions[..(s.body_count as usize).min(s.body_positions.len())]
             .iter()

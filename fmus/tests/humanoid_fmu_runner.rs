@@ -1,0 +1,246 @@
+//! `plamo.fmu` imported by a real FMI 2.0 host written in Rust (fmu-runner): the
+//! packaged archive is unpacked, loaded and stepped like any third-party FMU while
+//! the host drives a ball across the humanoid's route. Every output at every
+//! communication point must equal, bit for bit, an in-process lockstep run of the
+//! same route fed the same ball.
+
+use std::collections::HashMap;
+
+use fmu_runner::model_description::{Causality, ScalarVariable, SignalType};
+use fmu_runner::{Fmu, FmuInstance, FmuLibrary, fmi2Type};
+use plamo::fmu_package::{find_library, package_all};
+use plamo::lockstep::external::{PARKED_SAMPLE, in_process_with_external};
+use plamo::lockstep::{Lockstep, StepStatus};
+use plamo::spec::RunSpec;
+use plamo_controller::ControllerSettings;
+use plamo_interfaces::ObstacleSample;
+use plamo_physics::{BackendKind, JOINT_NAMES};
+use plamo_planner::FLAG_FINISHED;
+use plamo_scenes::ObstacleShape;
+
+/// The FMU's default route (fmu-runner has no string API): rapier completes it.
+const INSTRUCTIONS: &str = "Walk from the fountain to the sandbox";
+/// A communication step that is no multiple of the 1/30 s control step, accumulated
+/// the way hosts do.
+const HOST_STEP: f64 = 0.01;
+const STOP: f64 = 20.0;
+/// When the ball has crossed the route (t = 7 s) \[ticks\].
+const COMPARE_TICK: u64 = 7 * 120;
+
+/// The host's ball: rolls along +x across the route (fountain (4, 14) to sandbox
+/// (4, 4)) at y = 9, passing x = 4 at t = 5 s.
+fn ball(t: f64) -> ObstacleSample {
+    ObstacleSample {
+        position: [-1.0 + t, 9.0, 0.3],
+        velocity: [1.0, 0.0, 0.0],
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Out {
+    Real(u64),
+    Int(i32),
+    Bool(bool),
+}
+
+/// Every output of the reference run, by name, as the lockstep stands now.
+fn reference_outputs(ls: &Lockstep, finished: bool, count: usize) -> HashMap<String, Out> {
+    let s = &ls.world().agents[0];
+    let plan = &ls.plans()[0];
+    let mut m = HashMap::new();
+    let mut real = |n: String, x: f64| {
+        m.insert(n, Out::Real(x.to_bits()));
+    };
+    for (i, a) in ["x", "y", "z"].iter().enumerate() {
+        real(format!("head.{a}"), s.head_position[i]);
+        real(format!("root.{a}"), s.root_position[i]);
+    }
+    for (i, c) in ["qx", "qy", "qz", "qw"].iter().enumerate() {
+        real(format!("root.{c}"), s.root_orientation[i]);
+    }
+    let v = s.root_linear_velocity;
+    real("speed".into(), (v[0] * v[0] + v[1] * v[1]).sqrt());
+    for (j, name) in JOINT_NAMES.iter().enumerate() {
+        real(format!("joint.{name}"), s.joint_angles[j]);
+    }
+    real("progress".into(), plan.progress);
+    real("xy_error".into(), ls.xy_error(0));
+    m.insert("instruction".into(), Out::Int(plan.instruction as i32));
+    m.insert("instruction_count".into(), Out::Int(count as i32));
+    m.insert(
+        "done".into(),
+        Out::Bool(finished || plan.flags & FLAG_FINISHED != 0),
+    );
+    m.insert("fallen".into(), Out::Bool(ls.fallen()[0]));
+    m
+}
+
+fn fmu_outputs(
+    inst: &FmuInstance<&FmuLibrary>,
+    outputs: &[&ScalarVariable],
+) -> HashMap<String, Out> {
+    let pick = |ty: fn(&SignalType) -> bool| -> Vec<&ScalarVariable> {
+        outputs
+            .iter()
+            .copied()
+            .filter(|v| ty(&v.signal_type))
+            .collect()
+    };
+    let mut m = HashMap::new();
+    for (v, x) in inst
+        .get_reals(&pick(|t| matches!(t, SignalType::Real(_))))
+        .unwrap()
+    {
+        m.insert(v.name.clone(), Out::Real(x.to_bits()));
+    }
+    for (v, x) in inst
+        .get_integers(&pick(|t| matches!(t, SignalType::Integer(_))))
+        .unwrap()
+    {
+        m.insert(v.name.clone(), Out::Int(x));
+    }
+    for (v, x) in inst
+        .get_booleans(&pick(|t| matches!(t, SignalType::Boolean(_))))
+        .unwrap()
+    {
+        m.insert(v.name.clone(), Out::Bool(x != 0));
+    }
+    m
+}
+
+#[test]
+fn fmu_runner_outputs_equal_the_in_process_lockstep_bit_for_bit() {
+    let library = find_library().expect("cargo builds libplamo_fmu.so for this test");
+    let dir = std::env::temp_dir().join(format!("plamo-humanoid-fmu-{}", std::process::id()));
+    let packaged = package_all(&library, &dir, &[]).unwrap();
+    let humanoid = packaged
+        .iter()
+        .find(|p| p.model_name == "plamo")
+        .expect("plamo.fmu packaged");
+    let fmu = Fmu::unpack(&humanoid.path)
+        .unwrap()
+        .load(fmi2Type::fmi2CoSimulation)
+        .unwrap();
+    let vars = fmu.variables();
+    let var = |n: &str| {
+        vars.get(n)
+            .unwrap_or_else(|| panic!("variable {n} in modelDescription.xml"))
+    };
+    let mut outputs: Vec<&ScalarVariable> = vars
+        .values()
+        .filter(|v| matches!(v.causality, Causality::Output))
+        .collect();
+    outputs.sort_by_key(|v| v.value_reference);
+    assert_eq!(outputs.len(), 11 + JOINT_NAMES.len() + 6);
+
+    // The in-process reference: the same spec, the same lockstep, the same ball.
+    let spec = RunSpec {
+        scene: "playground".into(),
+        instructions: vec![INSTRUCTIONS.into()],
+        backend: BackendKind::Rapier,
+        seed: 3,
+    };
+    let scene = spec.load_scene().unwrap();
+    let count = plamo_planner::parse_instructions(INSTRUCTIONS, &scene)
+        .unwrap()
+        .len();
+    let links =
+        in_process_with_external(&spec, &scene, &[ObstacleShape::Sphere { radius: 0.3 }; 4])
+            .unwrap();
+    let mut reference = Lockstep::start(
+        links,
+        scene.clone(),
+        &[count],
+        &ControllerSettings::default(),
+        1e6,
+    )
+    .unwrap();
+    let externals = |t: f64| [PARKED_SAMPLE, ball(t), PARKED_SAMPLE, PARKED_SAMPLE];
+
+    let inst = FmuInstance::instantiate(&fmu, false).unwrap();
+    inst.setup_experiment(0.0, None, None).unwrap();
+    inst.enter_initialization_mode().unwrap();
+    inst.set_integers(&[(var("seed"), 3)].into_iter().collect())
+        .unwrap();
+    inst.set_booleans(&[(var("obstacle[2].active"), 1)].into_iter().collect())
+        .unwrap();
+    let set_ball = |t: f64| {
+        let b = ball(t);
+        let m: HashMap<_, _> = [
+            (var("obstacle[2].x"), b.position[0]),
+            (var("obstacle[2].y"), b.position[1]),
+            (var("obstacle[2].z"), b.position[2]),
+            (var("obstacle[2].vx"), b.velocity[0]),
+            (var("obstacle[2].vy"), b.velocity[1]),
+            (var("obstacle[2].vz"), b.velocity[2]),
+        ]
+        .into_iter()
+        .collect();
+        inst.set_reals(&m).unwrap();
+    };
+    set_ball(0.0);
+    inst.exit_initialization_mode().unwrap();
+    reference.set_external_obstacles(&externals(0.0)).unwrap();
+
+    let (mut t, mut finished, mut points, mut max_instruction) = (0.0_f64, false, 0, 0);
+    // Digest of the reference at COMPARE_TICK, to show the ball reached the planner.
+    let mut digest_with_ball = None;
+    loop {
+        let expected = reference_outputs(&reference, finished, count);
+        let got = fmu_outputs(&inst, &outputs);
+        assert_eq!(got.len(), expected.len(), "every output is compared");
+        for (name, e) in &expected {
+            assert_eq!(
+                got.get(name),
+                Some(e),
+                "output {name} at t = {t} s (communication point {points})"
+            );
+        }
+        if let Some(Out::Int(i)) = got.get("instruction") {
+            max_instruction = max_instruction.max(*i);
+        }
+        if got.get("done") == Some(&Out::Bool(true)) || t >= STOP {
+            break;
+        }
+        // Host: set the inputs for the coming step, then step.
+        set_ball(t);
+        inst.do_step(t, HOST_STEP, true).unwrap();
+        reference.set_external_obstacles(&externals(t)).unwrap();
+        let end = t + HOST_STEP;
+        while !finished && (reference.tick().0 + 4) as f64 / 120.0 <= end + 1e-9 {
+            match reference.step().unwrap() {
+                StepStatus::Running => {}
+                _ => finished = true,
+            }
+            if reference.tick().0 == COMPARE_TICK {
+                digest_with_ball = Some(reference.digest());
+            }
+        }
+        t = end;
+        points += 1;
+    }
+    assert!(
+        max_instruction as usize == count,
+        "the humanoid finished its route within {STOP} s (instruction {max_instruction} of {count} at t = {t:.2} s)"
+    );
+    assert!(points > 500, "{points} communication points compared");
+    drop(inst);
+
+    // Physics does not collide with host obstacles, so the ball can only change the
+    // run through the planner's re-planning: without it the run must differ.
+    let links =
+        in_process_with_external(&spec, &scene, &[ObstacleShape::Sphere { radius: 0.3 }; 4])
+            .unwrap();
+    let mut no_ball =
+        Lockstep::start(links, scene, &[count], &ControllerSettings::default(), 1e6).unwrap();
+    no_ball.set_external_obstacles(&[PARKED_SAMPLE; 4]).unwrap();
+    while no_ball.tick().0 < COMPARE_TICK {
+        no_ball.step().unwrap();
+    }
+    assert_ne!(
+        Some(no_ball.digest()),
+        digest_with_ball,
+        "the host's ball changed nothing: it never reached the planner"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

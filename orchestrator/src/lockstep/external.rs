@@ -1,0 +1,106 @@
+//! Obstacles driven from outside the run (an FMU host's ball or car).
+//!
+//! The planner predicts collisions only for obstacles its scene describes (their
+//! shapes), and matches observed states to them by index. So the planner of a run
+//! with external obstacles gets the scene plus one entry per external obstacle,
+//! parked out of the way; physics keeps the plain scene and reports the external
+//! states after its own obstacles, in the same order ([`Lockstep::set_external_obstacles`]
+//! puts them there). Physics does not collide with them (see `PhysicsComponent`).
+//!
+//! [`Lockstep::set_external_obstacles`]: super::Lockstep::set_external_obstacles
+
+use plamo_interfaces::{MAX_OBSTACLES, ObstacleSample};
+use plamo_scenes::{DynamicObstacle, Motion, ObstacleShape, Scene};
+
+use super::{InProcess, Link, Links, RunError};
+use crate::spec::RunSpec;
+
+/// Where an inactive external obstacle waits: far below any terrain, so no plan
+/// ever meets it \[m\].
+pub const PARKED: [f64; 3] = [0.0, 0.0, -1000.0];
+
+/// An external obstacle's state while it is inactive.
+pub const PARKED_SAMPLE: ObstacleSample = ObstacleSample {
+    position: PARKED,
+    velocity: [0.0; 3],
+};
+
+/// The scene as the planner sees it: `scene` plus one parked obstacle of each shape.
+pub fn planner_scene(scene: &Scene, shapes: &[ObstacleShape]) -> Result<Scene, RunError> {
+    let room = MAX_OBSTACLES.saturating_sub(scene.dynamic.len());
+    if shapes.len() > room {
+        return Err(RunError::Setup(format!(
+            "{} external obstacles, but scene `{}` has {} of its own and a world holds at most {MAX_OBSTACLES}",
+            shapes.len(),
+            scene.name,
+            scene.dynamic.len()
+        )));
+    }
+    let mut s = scene.clone();
+    s.dynamic
+        .extend(shapes.iter().enumerate().map(|(k, shape)| DynamicObstacle {
+            name: format!("external-{k}"),
+            shape: *shape,
+            motion: Motion::Linear {
+                from: PARKED,
+                to: PARKED,
+                speed: 1.0,
+            },
+        }));
+    Ok(s)
+}
+
+/// Every component of `spec` in this process, its planners aware of external
+/// obstacles of the given shapes (for agent placement, controllers and physics the
+/// scene is `scene` itself).
+pub fn in_process_with_external(
+    spec: &RunSpec,
+    scene: &Scene,
+    shapes: &[ObstacleShape],
+) -> Result<Links, RunError> {
+    let planner_view = planner_scene(scene, shapes)?;
+    let mut planners: Vec<Box<dyn Link<_, _>>> = Vec::new();
+    let mut controllers: Vec<Box<dyn Link<_, _>>> = Vec::new();
+    for k in 0..spec.agents() {
+        let start = spec.placement(scene, k)?;
+        let planner = plamo_planner::Planner::new(
+            planner_view.clone(),
+            &spec.instructions[k],
+            [start.x, start.y],
+            plamo_planner::PlannerSettings::default(),
+        )
+        .map_err(|e| RunError::Setup(format!("agent {k}: {e}")))?;
+        planners.push(Box::new(InProcess::new(
+            format!("planner-{k}"),
+            plamo_planner::PlannerComponent::new(planner, k as u32),
+        )));
+        controllers.push(Box::new(InProcess::new(
+            format!("controller-{k}"),
+            spec.controller(scene, k)?,
+        )));
+    }
+    Ok(Links {
+        physics: Box::new(InProcess::new("physics", spec.physics(scene)?)),
+        planners,
+        controllers,
+    })
+}
+
+/// Check external obstacle states: finite, and few enough to fit next to the scene's.
+pub(crate) fn check(scene_obstacles: usize, obstacles: &[ObstacleSample]) -> Result<(), RunError> {
+    if scene_obstacles + obstacles.len() > MAX_OBSTACLES {
+        return Err(RunError::Setup(format!(
+            "{} external obstacles next to the scene's {scene_obstacles}: a world holds at most {MAX_OBSTACLES}",
+            obstacles.len()
+        )));
+    }
+    for (k, o) in obstacles.iter().enumerate() {
+        if o.position.iter().chain(&o.velocity).any(|x| !x.is_finite()) {
+            return Err(RunError::Setup(format!(
+                "external obstacle {k}: position {:?} / velocity {:?}: finite numbers only",
+                o.position, o.velocity
+            )));
+        }
+    }
+    Ok(())
+}
