@@ -8,6 +8,7 @@ use plamo_interfaces::Tick;
 use plamo_scenes::{ObstacleState, Region, Scene};
 use serde::{Deserialize, Serialize};
 
+use crate::alt::AltLandmarks;
 use crate::astar::{AStar, SearchLimits};
 use crate::connectivity::Components;
 use crate::dynamic::{Conflict, Prediction, predict_conflict};
@@ -104,6 +105,8 @@ pub struct Planner {
     grid: PlanGrid,
     components: Vec<Components>,
     astar: AStar,
+    /// ALT bounds, built at construction when `settings.alt_landmarks > 0`.
+    alt: Option<AltLandmarks>,
     route: Vec<Trajectory>,
     // Run state.
     index: usize,
@@ -136,6 +139,8 @@ impl Planner {
         settings.validate()?;
         let instructions = parse_instructions(instructions, &scene)?;
         let grid = PlanGrid::build(&scene, &settings);
+        let alt = (settings.alt_landmarks > 0)
+            .then(|| AltLandmarks::build(&grid, settings.alt_landmarks));
         let mut p = Self {
             scene,
             settings,
@@ -143,6 +148,7 @@ impl Planner {
             grid,
             components: Vec::new(),
             astar: AStar::default(),
+            alt,
             route: Vec::new(),
             index: 0,
             current: None,
@@ -325,7 +331,14 @@ impl Planner {
         }
         let path = self
             .astar
-            .search(&self.grid, start, &goals, min_head, limits)
+            .search_with(
+                &self.grid,
+                start,
+                &goals,
+                min_head,
+                limits,
+                self.alt.as_ref(),
+            )
             .ok_or_else(|| self.unreachable(index, UnreachableReason::Disconnected))?;
         let ctx = RefineCtx {
             scene: &self.scene,
@@ -427,10 +440,14 @@ impl Planner {
             let goal = self
                 .start_cell(rj.x, rj.y, min_head, &limits)
                 .map_err(|_| self.unreachable(index, UnreachableReason::TargetBlocked))?;
-            let Some(path) = self
-                .astar
-                .search(&self.grid, start, &[goal], min_head, &limits)
-            else {
+            let Some(path) = self.astar.search_with(
+                &self.grid,
+                start,
+                &[goal],
+                min_head,
+                &limits,
+                self.alt.as_ref(),
+            ) else {
                 break;
             };
             let ctx = RefineCtx {
@@ -574,7 +591,8 @@ impl Planner {
         } else {
             Prediction::Observed(&input.obstacles)
         };
-        if let Some(tr) = self.current.clone()
+        if self.settings.dynamic_replanning
+            && let Some(tr) = self.current.clone()
             && let Some(conflict) = predict_conflict(&tr, &self.scene, &self.settings, now, how)
         {
             match self.replan_around(&tr, conflict, [hx, hy], now, how) {

@@ -59,6 +59,12 @@ pub struct PlannerSettings {
     /// Planning grid = every `grid_stride`-th terrain sample (1 = the terrain's own
     /// resolution, 0.1 m by default) \[samples\]. Default 1.
     pub grid_stride: usize,
+    /// Landmarks of the ALT lower bound for A* (not in the paper; see
+    /// `AltLandmarks`): `Planner::new` then runs one Dijkstra over the whole grid
+    /// per landmark (about 0.2 s each on 1000 x 1000 cells) and every search after
+    /// it expands far fewer cells for the same cheapest path. 0 = off, at most 32.
+    /// Worth it on large grids queried many times. Default 0.
+    pub alt_landmarks: usize,
     /// Spacing of the refined path \[m\]. Default 0.1.
     pub path_spacing: f64,
     /// Smoothing passes of the refiner (Laplacian, clearance-preserving). Default 40.
@@ -90,6 +96,9 @@ pub struct PlannerSettings {
     pub waypoint_count: usize,
     /// Time between waypoints \[s\]. Paper: 0.5.
     pub waypoint_dt: f64,
+    /// Re-plan around dynamic obstacles predicted to hit the plan (paper 4.1); off
+    /// only for the re-planning ablation of `plamo eval dynamic`. Default true.
+    pub dynamic_replanning: bool,
 }
 
 impl Default for PlannerSettings {
@@ -114,6 +123,7 @@ impl Default for PlannerSettings {
             max_step_height: 0.25,
             slope_speed_gain: 1.0,
             grid_stride: 1,
+            alt_landmarks: 0,
             path_spacing: 0.1,
             smoothing_iterations: 40,
             curvature_window: 0.3,
@@ -128,6 +138,7 @@ impl Default for PlannerSettings {
             lag_distance: 2.0,
             waypoint_count: 10,
             waypoint_dt: 0.5,
+            dynamic_replanning: true,
         }
     }
 }
@@ -209,6 +220,12 @@ impl PlannerSettings {
             return Err(PlanError::InvalidSettings {
                 field: "grid_stride",
                 reason: "must be >= 1".into(),
+            });
+        }
+        if self.alt_landmarks > 32 {
+            return Err(PlanError::InvalidSettings {
+                field: "alt_landmarks",
+                reason: format!("must be 0..=32, got {}", self.alt_landmarks),
             });
         }
         if self.waypoint_count == 0 {

@@ -294,3 +294,54 @@ fn stepping_reaches_every_target_in_order() {
     assert_eq!(last_status, PlanStatus::Finished);
     assert_eq!(reached, vec![1, 2]);
 }
+
+#[test]
+fn landmark_bounds_leave_routes_and_ceilings_unchanged() {
+    // ALT only speeds A* up: the same cheapest grid paths (up to ties, which the
+    // refiner smooths alike), so the same route lengths, and still under every roof.
+    let scene = flat_scene();
+    let text = "Run from the tree to the car, then crawl to the bench then walk to the swing then sprint to the tree";
+    let plain = Planner::new(scene.clone(), text, [3.0, 3.0], PlannerSettings::default()).unwrap();
+    let s = PlannerSettings {
+        alt_landmarks: 6,
+        ..Default::default()
+    };
+    let alt = Planner::new(scene.clone(), text, [3.0, 3.0], s.clone()).unwrap();
+    for (a, b) in plain.route().iter().zip(alt.route()) {
+        assert_fits_under_ceilings(&scene, b, s.head_margin);
+        let (la, lb) = (a.length(), b.length());
+        assert!((la - lb).abs() < 0.01 * la, "route lengths {la} vs {lb}");
+    }
+    let pyramid = |alt_landmarks| {
+        let p = Planner::new(
+            pyramid_scene(2.0),
+            "walk from the west to the east",
+            [6.0, 15.0],
+            PlannerSettings {
+                slope_preference_c: 10.0,
+                alt_landmarks,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        (p.route()[0].length(), max_ground(&p.route()[0]))
+    };
+    let (l0, g0) = pyramid(0);
+    let (l8, g8) = pyramid(8);
+    assert!((l0 - l8).abs() < 0.01 * l0, "pyramid detour {l0} vs {l8}");
+    assert!(
+        g8 < 0.2 && (g0 - g8).abs() < 0.05,
+        "detours alike: {g0} vs {g8}"
+    );
+    let err = Planner::new(
+        scene,
+        text,
+        [3.0, 3.0],
+        PlannerSettings {
+            alt_landmarks: 33,
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("alt_landmarks"), "{err}");
+}
