@@ -19,10 +19,12 @@ pub struct IpcSettings {
     /// Length of one wait before liveness is checked again \[s\] (default 0.05 s).
     pub slice: Duration,
     /// How long the orchestrator polls for a reply before it blocks on the peer's
-    /// wake-up event \[s\] (default 0.5 ms). In lockstep only one component computes
-    /// at a time, so polling costs one core that would idle anyway and saves the
-    /// scheduler's wake-up latency (tens of us) on every call; a reply slower than
-    /// this is waited for by blocking. Zero disables polling. Never changes results.
+    /// wake-up event \[s\]. In lockstep only one component computes at a time, so
+    /// on a machine with spare cores polling saves the scheduler's wake-up latency
+    /// (tens of us) on every call; on a small, loaded machine it takes the core the
+    /// component needs (measured on 2 cores at load 6: rapier 1.52x with polling vs
+    /// 1.22x without, see BENCHMARKS.md). Default: 0.5 ms with 4 or more cores, else
+    /// 0 (always block). Never changes results.
     pub poll: Duration,
     /// How long a component may take to come up and say it is ready (default 30 s).
     pub ready_timeout: Duration,
@@ -30,11 +32,21 @@ pub struct IpcSettings {
     pub call_timeout: Duration,
 }
 
+/// Poll only where a core is free for it while a component computes.
+fn default_poll() -> Duration {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if cores >= 4 {
+        Duration::from_micros(500)
+    } else {
+        Duration::ZERO
+    }
+}
+
 impl Default for IpcSettings {
     fn default() -> Self {
         Self {
             slice: Duration::from_millis(50),
-            poll: Duration::from_micros(500),
+            poll: default_poll(),
             ready_timeout: Duration::from_secs(30),
             call_timeout: Duration::from_secs(60),
         }
