@@ -2,6 +2,7 @@
 //! pictures and recordings the `plamo` CLI writes.
 #![warn(missing_docs)]
 
+pub mod export;
 pub mod fmu_package;
 pub mod ipc;
 pub mod lockstep;

@@ -9,6 +9,16 @@ use std::path::Path;
 use plamo_interfaces::{PhysicsOutput, PlanMessage};
 use plamo_physics::{JOINT_NAMES, NUM_JOINTS};
 
+/// File name of the scene a recording ran on (the resolved scene as JSON), so exports
+/// and the viewer rebuild the exact terrain and obstacles even for scenes from files.
+pub const SCENE_FILE: &str = "scene.json";
+
+/// Write the resolved scene into the recording directory as [`SCENE_FILE`].
+pub fn write_scene(dir: &Path, scene: &plamo_scenes::Scene) -> std::io::Result<()> {
+    let text = serde_json::to_string(scene).map_err(std::io::Error::other)?;
+    std::fs::write(dir.join(SCENE_FILE), text)
+}
+
 /// One executed head sample: position and speed, for the map.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HeadSample {

@@ -5,11 +5,13 @@ use std::process::ExitCode;
 
 mod component;
 mod eval;
+mod export;
 mod fmu;
 mod plan;
 mod run;
 mod scenes;
 mod tune;
+mod view;
 
 /// PlaMo: plan and move a physics-simulated humanoid through rich 3D scenes.
 #[derive(Debug, Parser)]
@@ -40,6 +42,10 @@ enum Command {
     /// Build the FMI 2.0 co-simulation FMUs.
     #[command(subcommand)]
     Fmu(fmu::FmuCommand),
+    /// Write replay.glb (glTF 2.0) and motion.bvh for a recorded run.
+    Export(export::ExportArgs),
+    /// Write (and open) the HTML replay viewer for recorded runs.
+    View(view::ViewArgs),
 }
 
 /// Run the parsed command; the exit code says whether it succeeded.
@@ -52,5 +58,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Tune(args) => tune::run(args),
         Command::Eval(cmd) => eval::run(cmd),
         Command::Fmu(cmd) => fmu::run(cmd),
+        Command::Export(args) => export::run(args),
+        Command::View(args) => view::run(args),
     }
 }

@@ -305,6 +305,8 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
             &world,
             digest,
         )?;
+        plamo::record::write_scene(dir, &scene)?;
+        plamo::export::export_dir(dir)?;
         println!("wrote {}", dir.display());
     }
     Ok(if all_ok {

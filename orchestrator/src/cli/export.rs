@@ -1,0 +1,23 @@
+//! `plamo export DIR`: write `replay.glb` and `motion.bvh` for a recorded run (what
+//! `plamo run --out DIR` writes itself), e.g. for recordings made before the
+//! exporters existed.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Args;
+
+/// Arguments of `plamo export`.
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// Recording directory (`plamo run --out DIR`).
+    dir: PathBuf,
+}
+
+/// Run `plamo export`.
+pub fn run(args: ExportArgs) -> anyhow::Result<ExitCode> {
+    for p in plamo::export::export_dir(&args.dir)? {
+        println!("wrote {}", p.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
