@@ -15,6 +15,18 @@ pub enum UnreachableReason {
     /// Start and target lie in different connected components of the traversable grid
     /// (walls, low tops or infeasible slopes separate them).
     Disconnected,
+    /// A dynamic obstacle, at its predicted position, covers every cell of the target
+    /// region: the target is occupied (for now; a later step plans again).
+    TargetOccupied {
+        /// The obstacle, numbered as in [`crate::Conflict::obstacle`].
+        obstacle: usize,
+    },
+    /// A dynamic obstacle, at its predicted position, covers the character and every
+    /// free cell near it.
+    StartOccupied {
+        /// The obstacle, numbered as in [`crate::Conflict::obstacle`].
+        obstacle: usize,
+    },
 }
 
 impl std::fmt::Display for UnreachableReason {
@@ -25,6 +37,18 @@ impl std::fmt::Display for UnreachableReason {
             Self::TargetBlocked => "the target region has no traversable cell",
             Self::Disconnected => {
                 "start and target are separated by walls, low tops or infeasible slopes"
+            }
+            Self::TargetOccupied { obstacle } => {
+                return write!(
+                    f,
+                    "dynamic obstacle {obstacle} covers the whole target region at its predicted position"
+                );
+            }
+            Self::StartOccupied { obstacle } => {
+                return write!(
+                    f,
+                    "dynamic obstacle {obstacle} covers the character and every free cell near it"
+                );
             }
         })
     }

@@ -32,7 +32,10 @@ pub use alt::{ALT_ACTIVE, AltLandmarks};
 pub use astar::{AStar, GridPath, Heuristic, SearchLimits};
 pub use component::{FLAG_FINISHED, FLAG_INFEASIBLE, FLAG_REPLANNED, PlannerComponent};
 pub use connectivity::{BLOCKED, Components};
-pub use dynamic::{Conflict, Prediction, predict, predict_conflict};
+pub use dynamic::{
+    Conflict, External, ExternalObstacle, Prediction, predict, predict_conflict,
+    predict_conflict_with,
+};
 pub use error::{PlanError, SpeedFailure, UnreachableReason};
 pub use grid::PlanGrid;
 pub use instructions::{Instruction, Locomotion, Source, VALID_VERBS, parse_instructions};

@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::alt::AltLandmarks;
 use crate::astar::{AStar, SearchLimits};
 use crate::connectivity::Components;
-use crate::dynamic::{Conflict, Prediction, predict_conflict};
+use crate::dynamic::{Conflict, External, ExternalObstacle, Prediction, predict_conflict_with};
 use crate::grid::PlanGrid;
 use crate::refine::{PathPoint, RefineCtx, annotate, refine};
 use crate::speed_oracle::SpeedProblem;
@@ -107,6 +107,9 @@ pub struct Planner {
     astar: AStar,
     /// ALT bounds, built at construction when `settings.alt_landmarks > 0`.
     alt: Option<AltLandmarks>,
+    /// The host's obstacles (not in the scene) and when they were observed \[s\].
+    external: Vec<ExternalObstacle>,
+    external_observed: f64,
     route: Vec<Trajectory>,
     // Run state.
     index: usize,
@@ -149,6 +152,8 @@ impl Planner {
             components: Vec::new(),
             astar: AStar::default(),
             alt,
+            external: Vec::new(),
+            external_observed: 0.0,
             route: Vec::new(),
             index: 0,
             current: None,
@@ -180,6 +185,47 @@ impl Planner {
     pub fn grid(&self) -> &PlanGrid {
         &self.grid
     }
+    /// Replace the host's obstacles that the scene does not know (a car or a ball a
+    /// co-simulation host drives), with their states observed at absolute time
+    /// `observed` \[s\]; from the next step on they are predicted at constant
+    /// velocity and avoided like the scene's. An empty slice removes them. Rejects
+    /// non-finite numbers and non-positive sizes, naming the obstacle, and then
+    /// keeps the previous set.
+    pub fn set_external_obstacles(
+        &mut self,
+        observed: f64,
+        obstacles: &[ExternalObstacle],
+    ) -> Result<(), PlanError> {
+        if !observed.is_finite() {
+            return Err(PlanError::InvalidInput {
+                field: "external obstacles",
+                reason: format!("observation time must be finite, got {observed}"),
+            });
+        }
+        for (j, o) in obstacles.iter().enumerate() {
+            o.check().map_err(|e| PlanError::InvalidInput {
+                field: "external obstacles",
+                reason: format!("obstacle {j}: {e}"),
+            })?;
+        }
+        self.external.clear();
+        self.external.extend_from_slice(obstacles);
+        self.external_observed = observed;
+        Ok(())
+    }
+
+    /// The host's obstacles set by [`Self::set_external_obstacles`].
+    pub fn external_obstacles(&self) -> &[ExternalObstacle] {
+        &self.external
+    }
+
+    fn external(&self) -> External<'_> {
+        External {
+            obstacles: &self.external,
+            observed: self.external_observed,
+        }
+    }
+
     /// The trajectory currently followed (after the first step).
     pub fn current(&self) -> Option<&Trajectory> {
         self.current.as_deref()
@@ -368,7 +414,10 @@ impl Planner {
     /// Local re-plan around a predicted conflict: A* in a window from the current
     /// position to a rejoin point on the old path, with the obstacle at its predicted
     /// position blocked; the detour is spliced into the old path and re-timed over
-    /// `replan_speed_horizon`. Up to three conflicts are added in turn.
+    /// `replan_speed_horizon`. Up to three conflicts are added in turn. When the
+    /// detour would end at the target, it ends in the target's cells the obstacles
+    /// leave free; an obstacle covering all of them (or the character and all free
+    /// cells near it) is an `Unreachable` error naming it.
     pub fn replan_around(
         &mut self,
         old: &Trajectory,
@@ -377,6 +426,12 @@ impl Planner {
         now: f64,
         how: Prediction,
     ) -> Result<Trajectory, PlanError> {
+        if old.points.is_empty() {
+            return Err(PlanError::InvalidInput {
+                field: "old",
+                reason: "the trajectory to re-plan has no points".into(),
+            });
+        }
         let s = self.settings.clone();
         let index = self.index.min(self.instructions.len() - 1);
         let form = self.instructions[index].locomotion;
@@ -387,11 +442,7 @@ impl Planner {
         let mut best = None;
         for _ in 0..3 {
             let o = conflict.obstacle_position;
-            let rad = self.scene.dynamic[conflict.obstacle]
-                .shape
-                .bounding_radius_xy()
-                + s.character_radius
-                + s.obstacle_margin;
+            let rad = conflict.radius_xy + s.character_radius + s.obstacle_margin;
             discs.push([o[0], o[1], rad]);
             // Rejoin beyond the last old point near any disc.
             let near = |p: &PathPoint| {
@@ -434,16 +485,54 @@ impl Planner {
                 blocked_discs: discs.clone(),
                 window: Some(window),
             };
-            let start = self
-                .start_cell(from[0], from[1], min_head, &limits)
-                .map_err(|r| self.unreachable(index, r))?;
-            let goal = self
-                .start_cell(rj.x, rj.y, min_head, &limits)
-                .map_err(|_| self.unreachable(index, UnreachableReason::TargetBlocked))?;
+            let start = match self.start_cell(from[0], from[1], min_head, &limits) {
+                Ok(c) => c,
+                Err(r) => {
+                    let free =
+                        self.start_cell(from[0], from[1], min_head, &SearchLimits::default());
+                    let r = if free.is_ok() {
+                        UnreachableReason::StartOccupied {
+                            obstacle: conflict.obstacle,
+                        }
+                    } else {
+                        r
+                    };
+                    return Err(self.unreachable(index, r));
+                }
+            };
+            let goals: Vec<usize> = if rejoin == last {
+                // The detour ends the instruction: any target cell the discs leave.
+                let (cells, _) = self.goal_cells(index, min_head);
+                if cells.is_empty() {
+                    return Err(self.unreachable(index, UnreachableReason::TargetBlocked));
+                }
+                let free: Vec<usize> = cells
+                    .iter()
+                    .copied()
+                    .filter(|&c| {
+                        let [x, y] = self.grid.position(c);
+                        discs
+                            .iter()
+                            .all(|d| (x - d[0]).powi(2) + (y - d[1]).powi(2) > d[2] * d[2])
+                    })
+                    .collect();
+                if free.is_empty() {
+                    let r = UnreachableReason::TargetOccupied {
+                        obstacle: conflict.obstacle,
+                    };
+                    return Err(self.unreachable(index, r));
+                }
+                free
+            } else {
+                vec![
+                    self.start_cell(rj.x, rj.y, min_head, &limits)
+                        .map_err(|_| self.unreachable(index, UnreachableReason::TargetBlocked))?,
+                ]
+            };
             let Some(path) = self.astar.search_with(
                 &self.grid,
                 start,
-                &[goal],
+                &goals,
                 min_head,
                 &limits,
                 self.alt.as_ref(),
@@ -488,7 +577,7 @@ impl Planner {
                 pts[k].v = b.max(0.0).sqrt().min(pts[k].v_cap);
             }
             let tr = Trajectory::new(now, pts);
-            let again = predict_conflict(&tr, &self.scene, &s, now, how);
+            let again = predict_conflict_with(&tr, &self.scene, self.external(), &s, now, how);
             best = Some(tr);
             match again {
                 Some(c) => conflict = c,
@@ -515,6 +604,19 @@ impl Planner {
             return Err(PlanError::InvalidInput {
                 field: "head/root/velocity",
                 reason: "must be finite".into(),
+            });
+        }
+        if let Some(k) = input
+            .obstacles
+            .iter()
+            .position(|o| !o.position.iter().chain(&o.velocity).all(|v| v.is_finite()))
+        {
+            return Err(PlanError::InvalidInput {
+                field: "obstacles",
+                reason: format!(
+                    "observed state of scene obstacle {k} must be finite, got {:?}",
+                    input.obstacles[k]
+                ),
             });
         }
         if let Some(last) = self.last_tick
@@ -593,7 +695,8 @@ impl Planner {
         };
         if self.settings.dynamic_replanning
             && let Some(tr) = self.current.clone()
-            && let Some(conflict) = predict_conflict(&tr, &self.scene, &self.settings, now, how)
+            && let Some(conflict) =
+                predict_conflict_with(&tr, &self.scene, self.external(), &self.settings, now, how)
         {
             match self.replan_around(&tr, conflict, [hx, hy], now, how) {
                 Ok(new) => {

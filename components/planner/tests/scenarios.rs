@@ -3,10 +3,10 @@
 use plamo_interfaces::Tick;
 use plamo_planner::synthetic::{ball_scene, flat_scene, pyramid_scene, slalom_scene};
 use plamo_planner::{
-    PlanError, PlanStatus, Planner, PlannerInput, PlannerSettings, Prediction, ReplanReason,
-    Trajectory, UnreachableReason, predict_conflict,
+    ExternalObstacle, PlanError, PlanStatus, Planner, PlannerInput, PlannerOutput, PlannerSettings,
+    Prediction, ReplanReason, Trajectory, UnreachableReason, predict_conflict,
 };
-use plamo_scenes::{Footprint, Scene, Wall};
+use plamo_scenes::{Footprint, ObstacleShape, ObstacleState, Scene, Wall};
 
 fn max_ground(t: &Trajectory) -> f64 {
     t.points.iter().map(|p| p.ground).fold(f64::MIN, f64::max)
@@ -344,4 +344,228 @@ fn landmark_bounds_leave_routes_and_ceilings_unchanged() {
     )
     .unwrap_err();
     assert!(err.to_string().contains("alt_landmarks"), "{err}");
+}
+
+/// The 30 m x 10 m corridor of `ball_scene` without its ball: only the host's
+/// obstacles move here.
+fn empty_corridor() -> Scene {
+    let mut scene = ball_scene(0.0);
+    scene.dynamic.clear();
+    scene
+}
+
+fn still(shape: ObstacleShape, x: f64, y: f64) -> ExternalObstacle {
+    ExternalObstacle {
+        shape,
+        state: ObstacleState {
+            position: [x, y, 0.7],
+            velocity: [0.0; 3],
+        },
+    }
+}
+
+/// One planner step at `tick` with the humanoid exactly on the current plan.
+fn step_on_plan(p: &mut Planner, tick: u64) -> PlannerOutput {
+    let now = tick as f64 / 120.0;
+    let w = match p.current() {
+        Some(c) => c.sample_at(now),
+        None => p.route()[0].sample_at(now),
+    };
+    p.plan_step(
+        Tick(tick),
+        &PlannerInput {
+            head: w.position,
+            velocity: [w.speed, 0.0, 0.0],
+            ..Default::default()
+        },
+    )
+    .unwrap()
+}
+
+#[test]
+fn host_obstacle_appearing_mid_run_is_avoided() {
+    let s = PlannerSettings::default();
+    let mut p = Planner::new(
+        empty_corridor(),
+        "run from the a to the b",
+        [2.0, 5.0],
+        s.clone(),
+    )
+    .unwrap();
+    let car = ObstacleShape::Box {
+        half_extents: [1.0, 0.6, 0.7],
+    };
+    let mut tick = 0;
+    let mut appeared = None;
+    let mut replanned = false;
+    let mut finished = false;
+    let mut min_gap = f64::INFINITY;
+    while tick < 120 * 60 {
+        let now = tick as f64 / 120.0;
+        if appeared.is_none() && now >= 3.0 {
+            // A parked car appears on the path 2.5 m ahead of the runner.
+            let tr = p.current().unwrap();
+            let ahead = tr.sample_at(now).s + 2.5;
+            let q = *tr.points.iter().find(|q| q.s >= ahead).unwrap();
+            p.set_external_obstacles(now, &[still(car, q.x, q.y)])
+                .unwrap();
+            appeared = Some([q.x, q.y]);
+        }
+        let out = step_on_plan(&mut p, tick);
+        assert!(
+            !matches!(out.status, PlanStatus::Infeasible { .. }),
+            "{:?}",
+            out.status
+        );
+        if let Some(ReplanReason::Obstacle(c)) = out.replanned {
+            // Numbered after the scene's obstacles (none here).
+            assert_eq!(c.obstacle, 0);
+            replanned = true;
+        }
+        if let Some(o) = appeared {
+            let w = p.current().unwrap().sample_at(now);
+            min_gap = min_gap.min((w.position[0] - o[0]).hypot(w.position[1] - o[1]));
+        }
+        if out.status == PlanStatus::Finished {
+            finished = true;
+            break;
+        }
+        tick += 4;
+    }
+    assert!(replanned, "re-planned around the car");
+    assert!(finished, "reached b past the car");
+    // The car's half-diagonal 1.17 m + character radius 0.3 m.
+    assert!(min_gap > 1.17 + 0.3, "closest approach {min_gap} m");
+}
+
+#[test]
+fn host_obstacle_on_the_target_is_reported_not_a_panic() {
+    let s = PlannerSettings::default();
+    let mut p = Planner::new(
+        empty_corridor(),
+        "run from the a to the b",
+        [2.0, 5.0],
+        s.clone(),
+    )
+    .unwrap();
+    // A ball of 1.5 m radius parked on landmark b (radius 0.5 m at (28, 5)).
+    let ball = ObstacleShape::Sphere { radius: 1.5 };
+    p.set_external_obstacles(0.0, &[still(ball, 28.0, 5.0)])
+        .unwrap();
+    let mut tick = 0;
+    let mut occupied = None;
+    while tick < 120 * 30 {
+        let out = step_on_plan(&mut p, tick);
+        if let PlanStatus::Infeasible { index, reason } = out.status {
+            occupied = Some((index, reason));
+            break;
+        }
+        assert_ne!(
+            out.status,
+            PlanStatus::Finished,
+            "cannot finish inside the ball"
+        );
+        tick += 4;
+    }
+    let (index, reason) = occupied.expect("the occupied target is reported");
+    assert_eq!(index, 0);
+    assert_eq!(reason, UnreachableReason::TargetOccupied { obstacle: 0 });
+    assert!(reason.to_string().contains("obstacle 0"), "{reason}");
+    // The plan kept stays out of the ball until the step that reported it.
+    let kept = p.current().unwrap();
+    let now = tick as f64 / 120.0;
+    let w = kept.sample_at(now);
+    assert!((w.position[0] - 28.0).hypot(w.position[1] - 5.0) > 1.5);
+    // The host moves the ball away: the next steps plan to the target again.
+    p.set_external_obstacles(now, &[still(ball, 28.0, 9.0)])
+        .unwrap();
+    let out = step_on_plan(&mut p, tick + 4);
+    assert!(
+        !matches!(out.status, PlanStatus::Infeasible { .. }),
+        "{:?}",
+        out.status
+    );
+}
+
+#[test]
+fn host_obstacle_covering_the_character_is_reported() {
+    let s = PlannerSettings::default();
+    let mut p = Planner::new(
+        empty_corridor(),
+        "run from the a to the b",
+        [2.0, 5.0],
+        s.clone(),
+    )
+    .unwrap();
+    step_on_plan(&mut p, 0);
+    // A 12 m box lands on the runner: no free cell within reach.
+    let slab = ObstacleShape::Box {
+        half_extents: [6.0, 6.0, 0.5],
+    };
+    p.set_external_obstacles(1.0 / 30.0, &[still(slab, 2.5, 5.0)])
+        .unwrap();
+    let out = step_on_plan(&mut p, 4);
+    assert_eq!(
+        out.status,
+        PlanStatus::Infeasible {
+            index: 0,
+            reason: UnreachableReason::StartOccupied { obstacle: 0 }
+        }
+    );
+}
+
+#[test]
+fn bad_host_obstacles_are_rejected_naming_the_obstacle() {
+    let mut p = Planner::new(
+        empty_corridor(),
+        "run from the a to the b",
+        [2.0, 5.0],
+        PlannerSettings::default(),
+    )
+    .unwrap();
+    let ok = still(ObstacleShape::Sphere { radius: 0.3 }, 10.0, 5.0);
+    let mut nan = ok;
+    nan.state.position[1] = f64::NAN;
+    let err = p.set_external_obstacles(0.0, &[ok, nan]).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("obstacle 1") && msg.contains("position"),
+        "{msg}"
+    );
+    let flat = still(
+        ObstacleShape::Box {
+            half_extents: [1.0, 0.0, 1.0],
+        },
+        10.0,
+        5.0,
+    );
+    let msg = p
+        .set_external_obstacles(0.0, &[flat])
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("obstacle 0") && msg.contains("> 0"), "{msg}");
+    let msg = p
+        .set_external_obstacles(f64::INFINITY, &[ok])
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("time"), "{msg}");
+    // Observed states of scene obstacles are checked too.
+    let err = p
+        .plan_step(
+            Tick(0),
+            &PlannerInput {
+                head: [2.0, 5.0, 1.47],
+                obstacles: vec![ObstacleState {
+                    position: [1.0, f64::INFINITY, 0.0],
+                    velocity: [0.0; 3],
+                }],
+                ..Default::default()
+            },
+        )
+        .unwrap_err();
+    assert!(err.to_string().contains("scene obstacle 0"), "{err}");
+    // Rejected sets leave the previous one in place.
+    assert!(p.external_obstacles().is_empty());
+    p.set_external_obstacles(0.0, &[ok]).unwrap();
+    assert_eq!(p.external_obstacles(), &[ok]);
 }
