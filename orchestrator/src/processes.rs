@@ -9,6 +9,7 @@ use std::process::{Child, Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use iceoryx2::node::NodeView;
 use iceoryx2::prelude::*;
 use plamo_interfaces::{ComponentKind, RunId, ServiceNames};
 
@@ -52,6 +53,47 @@ fn ipc_setup(what: &str) -> impl FnOnce(IpcError) -> RunError + '_ {
     move |e| RunError::Setup(format!("{what}: {e}"))
 }
 
+/// The `plamo component ...` arguments of every component instance of a run, in
+/// start order (physics, then each agent's planner and controller).
+pub fn component_args(spec: &RunSpec, run: &RunId) -> Vec<(ComponentKind, u32, Vec<String>)> {
+    let mut order = vec![(ComponentKind::Physics, 0)];
+    for k in 0..spec.agents() as u32 {
+        order.push((ComponentKind::Planner, k));
+        order.push((ComponentKind::Controller, k));
+    }
+    order
+        .into_iter()
+        .map(|(kind, agent)| {
+            let mut args = vec![
+                "component".to_string(),
+                kind.as_str().to_string(),
+                "--run".into(),
+                run.as_str().to_string(),
+                "--agent".into(),
+                agent.to_string(),
+            ];
+            args.extend(spec.to_args());
+            (kind, agent, args)
+        })
+        .collect()
+}
+
+/// How the component processes come to be.
+#[derive(Debug, Clone, Copy)]
+pub enum Launch<'a> {
+    /// The orchestrator spawns them from this executable; `physics_fault` is passed
+    /// to the physics process as `--fault` (reliability tests only).
+    Spawn {
+        /// The `plamo` executable.
+        exe: &'a Path,
+        /// `crash@TICK` or `wrong-tick@TICK`.
+        physics_fault: Option<&'a str>,
+    },
+    /// Someone starts them by hand (`plamo component ...`, see [`component_args`]),
+    /// on this machine, within the ready timeout.
+    Attach,
+}
+
 impl ProcessRun {
     /// Start every component of `spec` as a child process of `exe` under run `run`,
     /// and wait until each has said it is ready. `physics_fault` is passed to the
@@ -62,6 +104,17 @@ impl ProcessRun {
         exe: &Path,
         settings: IpcSettings,
         physics_fault: Option<&str>,
+    ) -> Result<(Self, Links), RunError> {
+        Self::launch(spec, run, Launch::Spawn { exe, physics_fault }, settings)
+    }
+
+    /// Open the run's links, start (or wait for) its component processes, and wait
+    /// until each has said it is ready for this very spec.
+    pub fn launch(
+        spec: &RunSpec,
+        run: &RunId,
+        launch: Launch<'_>,
+        settings: IpcSettings,
     ) -> Result<(Self, Links), RunError> {
         let cfg = run_config(run)?;
         // Crashed earlier runs (this id or any other) may have left files behind.
@@ -78,7 +131,7 @@ impl ProcessRun {
             children: Vec::new(),
             cleaned,
         };
-        let result = this.spawn_all(&node, spec, run, exe, settings, physics_fault);
+        let result = this.spawn_all(&node, spec, run, launch, settings);
         this.node = Some(node);
         match result {
             Ok(links) => Ok((this, links)),
@@ -133,19 +186,21 @@ impl ProcessRun {
         node: &Node<ipc::Service>,
         spec: &RunSpec,
         run: &RunId,
-        exe: &Path,
+        launch: Launch<'_>,
         settings: IpcSettings,
-        physics_fault: Option<&str>,
     ) -> Result<Links, RunError> {
+        let all_args = component_args(spec, run);
         let spawn = |kind: ComponentKind, agent: u32, slot: &Slot| -> Result<(), RunError> {
+            let Launch::Spawn { exe, physics_fault } = launch else {
+                return Ok(());
+            };
+            let args = all_args
+                .iter()
+                .find(|(k, a, _)| *k == kind && *a == agent)
+                .map(|(_, _, args)| args.clone())
+                .unwrap_or_default();
             let mut cmd = Command::new(exe);
-            cmd.arg("component")
-                .arg(kind.as_str())
-                .arg("--run")
-                .arg(run.as_str())
-                .arg("--agent")
-                .arg(agent.to_string())
-                .args(spec.to_args())
+            cmd.args(args)
                 .args(
                     physics_fault
                         .filter(|_| kind == ComponentKind::Physics)
@@ -177,12 +232,13 @@ impl ProcessRun {
             spawn(ComponentKind::Controller, k, &slot)?;
             controllers.push(c);
         }
-        physics.wait_ready()?;
+        let identity = spec.identity();
+        physics.wait_ready(&identity)?;
         for p in &mut planners {
-            p.wait_ready()?;
+            p.wait_ready(&identity)?;
         }
         for c in &mut controllers {
-            c.wait_ready()?;
+            c.wait_ready(&identity)?;
         }
         Ok(Links {
             physics: Box::new(physics),
@@ -208,6 +264,23 @@ impl ProcessRun {
             .iter()
             .filter_map(|(n, s)| s.lock().ok()?.as_ref().map(|c| (n.clone(), c.id())))
             .collect()
+    }
+
+    /// Component nodes of this run that are alive (the orchestrator's excluded).
+    fn live_components(&self) -> usize {
+        let mut live = 0;
+        let _ = Node::<ipc::Service>::list(&self.cfg, |state| {
+            if let NodeState::Alive(view) = &state
+                && view
+                    .details()
+                    .as_ref()
+                    .is_some_and(|d| d.name().as_str() != ORCHESTRATOR_NODE)
+            {
+                live += 1;
+            }
+            CallbackProgression::Continue
+        });
+        live
     }
 
     /// Stop every component (politely, then by force), close the links, and remove
@@ -244,6 +317,11 @@ impl ProcessRun {
                     }
                 }
             }
+        }
+        // Components attached by hand are nobody's children: give them the same
+        // grace to exit, watching their nodes instead of their processes.
+        while Instant::now() < deadline && self.live_components() > 0 {
+            std::thread::sleep(Duration::from_millis(10));
         }
         drop(self.node.take());
         // Every node of the run is gone now; the last file can go.

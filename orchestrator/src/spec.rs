@@ -136,6 +136,30 @@ impl RunSpec {
         })
     }
 
+    /// What a component process was built for, as it announces itself to the
+    /// orchestrator (which refuses a component started for another run): scene,
+    /// backend, seed, agent count and an FNV-1a fingerprint of the instructions.
+    pub fn identity(&self) -> String {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in self.instructions.join("\n").bytes() {
+            h = (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        let mut scene = self.scene.clone();
+        if scene.len() > 300 {
+            let mut cut = scene.len() - 300;
+            while !scene.is_char_boundary(cut) {
+                cut += 1;
+            }
+            scene = format!("...{}", &scene[cut..]);
+        }
+        format!(
+            "scene {scene}, physics {}, seed {}, {} agent(s), instructions #{h:016x}",
+            self.backend,
+            self.seed,
+            self.agents()
+        )
+    }
+
     /// The command-line arguments that give a component process this spec.
     pub fn to_args(&self) -> Vec<String> {
         let mut a = vec![

@@ -60,8 +60,16 @@ type Started = (
     Arc<AtomicBool>,
 );
 
+/// What the test server says it was built for.
+const IDENTITY: &str = "accumulator for the ipc tests";
+
 /// Start a server thread for `run` and return a connected client and the thread.
 fn start(run: &str) -> Started {
+    start_as(run, IDENTITY)
+}
+
+/// [`start`] with a server announcing `identity`.
+fn start_as(run: &str, identity: &'static str) -> Started {
     let run = RunId::new(run).unwrap();
     let cfg = run_config(&run).unwrap();
     let names = ServiceNames::new(&run, ComponentKind::Controller, 0);
@@ -90,6 +98,7 @@ fn start(run: &str) -> Started {
             &n,
             &server_names,
             &IpcSettings::default(),
+            identity,
         );
         done_server.store(true, Ordering::SeqCst);
         r
@@ -100,7 +109,7 @@ fn start(run: &str) -> Started {
 #[test]
 fn lockstep_round_trips_match_in_process_steps() {
     let (mut client, handle, _orch, _) = start("ipc-test-lockstep");
-    client.wait_ready().unwrap();
+    client.wait_ready(IDENTITY).unwrap();
     let mut local = Accumulator::default();
     for tick in (0..400u64).step_by(4) {
         let input = tick * 7 + 3;
@@ -131,7 +140,7 @@ fn files_of(run: &str) -> Vec<std::path::PathBuf> {
 #[test]
 fn component_errors_come_back_with_their_message() {
     let (mut client, handle, _orch, _) = start("ipc-test-errors");
-    client.wait_ready().unwrap();
+    client.wait_ready(IDENTITY).unwrap();
     client.call(0, &1).unwrap();
     let err = client.call(4, &666).unwrap_err();
     let text = err.to_string();
@@ -151,8 +160,8 @@ fn component_errors_come_back_with_their_message() {
 fn concurrent_runs_with_the_same_service_names_are_isolated() {
     let (mut a, ha, oa, _) = start("ipc-test-iso-a");
     let (mut b, hb, ob, _) = start("ipc-test-iso-b");
-    a.wait_ready().unwrap();
-    b.wait_ready().unwrap();
+    a.wait_ready(IDENTITY).unwrap();
+    b.wait_ready(IDENTITY).unwrap();
     for tick in (0..80u64).step_by(4) {
         let ra = a.call(tick, &1).unwrap();
         let rb = b.call(tick, &2).unwrap();
@@ -169,7 +178,7 @@ fn concurrent_runs_with_the_same_service_names_are_isolated() {
 #[test]
 fn a_dead_peer_is_reported_instead_of_waiting_forever() {
     let (mut client, handle, _orch, _) = start("ipc-test-dead");
-    client.wait_ready().unwrap();
+    client.wait_ready(IDENTITY).unwrap();
     client.call(0, &1).unwrap();
     client.shutdown().unwrap();
     handle.join().unwrap().unwrap();
@@ -188,5 +197,23 @@ fn a_component_exits_when_its_orchestrator_is_gone() {
     assert!(matches!(err, IpcError::PeerDied { .. }), "{err}");
     let cfg = run_config(&RunId::new("ipc-test-orphan").unwrap()).unwrap();
     end_run(&cfg).unwrap();
-    assert_eq!(files_of("ipc-test-orphan"), Vec::<String>::new());
+    assert_eq!(
+        files_of("ipc-test-orphan"),
+        Vec::<std::path::PathBuf>::new()
+    );
+}
+
+#[test]
+fn a_component_built_for_another_run_is_refused() {
+    let (mut client, handle, orch, _) = start_as("ipc-test-mismatch", "scene pyramid, seed 9");
+    let err = client.wait_ready(IDENTITY).unwrap_err();
+    let text = err.to_string();
+    assert!(matches!(err, IpcError::Mismatch { .. }), "{text}");
+    assert!(
+        text.contains("scene pyramid, seed 9") && text.contains(IDENTITY),
+        "{text}"
+    );
+    client.shutdown().unwrap();
+    handle.join().unwrap().unwrap();
+    end("ipc-test-mismatch", client, orch);
 }

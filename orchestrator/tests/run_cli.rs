@@ -470,3 +470,99 @@ fn realtime_pacing_changes_the_wall_clock_only() {
         "sim {sim} s, loop {lp} s"
     );
 }
+
+/// Start `plamo run --processes --attach` and read the component commands it prints;
+/// the rest of its stderr is collected by a thread.
+fn attach(run: &str, extra: &[&str]) -> (Child, Vec<String>, std::thread::JoinHandle<String>) {
+    use std::io::BufRead;
+    let mut orch = plamo(extra)
+        .args(["--processes", "--attach", "--run", run])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = std::io::BufReader::new(orch.stderr.take().unwrap()).lines();
+    let mut commands = Vec::new();
+    let mut head = String::new();
+    while commands.len() < 3 {
+        let line = lines.next().expect("orchestrator stderr ended").unwrap();
+        head.push_str(&line);
+        head.push('\n');
+        if line.starts_with("  ") && line.contains(" component ") {
+            commands.push(line.trim().to_string());
+        }
+    }
+    assert!(head.contains(&format!("run `{run}`")), "{head}");
+    let rest =
+        std::thread::spawn(move || lines.map_while(Result::ok).collect::<Vec<_>>().join("\n"));
+    (orch, commands, rest)
+}
+
+#[test]
+fn components_started_by_hand_attach_to_the_run() {
+    let run = "cli-test-attach";
+    let args = ["--instructions", ROUTE, "--max-seconds", "1", "--seed", "5"];
+    let (orch, commands, rest) = attach(run, &args);
+    // Exactly what a user would paste into three terminals.
+    let mut comps: Vec<Child> = commands
+        .iter()
+        .map(|c| {
+            Command::new("sh")
+                .args(["-c", c])
+                .stdout(Stdio::null())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let out = orch.wait_with_output().unwrap();
+    let err = rest.join().unwrap();
+    assert!(
+        out.status.success() || String::from_utf8_lossy(&out.stdout).contains("digest"),
+        "{err}"
+    );
+    for c in &mut comps {
+        let s = wait_with_deadline(c, Duration::from_secs(30)).expect("component hangs");
+        assert!(s.success(), "a component failed: {err}");
+    }
+    let inproc = run_ok(&args, &out_dir("attach-ref"));
+    assert_eq!(digest(&out), digest(&inproc));
+    assert_eq!(leftovers(run), Vec::<PathBuf>::new());
+}
+
+#[test]
+fn a_component_started_for_another_run_is_refused() {
+    let run = "cli-test-attach-wrong";
+    let (orch, commands, rest) = attach(
+        run,
+        &[
+            "--instructions",
+            ROUTE,
+            "--max-seconds",
+            "1",
+            "--attach-timeout",
+            "30",
+        ],
+    );
+    let physics = commands
+        .iter()
+        .find(|c| c.contains(" component physics "))
+        .unwrap();
+    // The same command with another seed: a different run.
+    assert!(physics.contains(" --seed 0 "), "{physics}");
+    let wrong = physics.replace(" --seed 0 ", " --seed 6 ");
+    let mut comp = Command::new("sh")
+        .args(["-c", &wrong])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let out = orch.wait_with_output().unwrap();
+    let err = rest.join().unwrap();
+    assert!(!out.status.success());
+    assert!(
+        err.contains("physics was started for another run") && err.contains("seed 6"),
+        "{err}"
+    );
+    wait_with_deadline(&mut comp, Duration::from_secs(30)).expect("component hangs");
+    assert_eq!(leftovers(run), Vec::<PathBuf>::new());
+}

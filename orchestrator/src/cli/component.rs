@@ -1,5 +1,7 @@
 //! `plamo component planner|controller|physics --run ID [--agent K] ...`: serve one
-//! component over iceoryx2 for a multi-process run (the orchestrator starts these).
+//! component over iceoryx2 for a multi-process run. `plamo run --processes` starts
+//! these itself; with `--attach` it prints the commands and waits for someone to
+//! start them (another terminal, a debugger, a profiler).
 
 use std::process::ExitCode;
 
@@ -72,13 +74,18 @@ fn parse_fault(f: &str) -> anyhow::Result<(&str, u64)> {
     Ok((what, tick.parse().context("--fault tick")?))
 }
 
-fn serve_one<C>(c: &mut C, node: &Node<ipc::Service>, names: &ServiceNames) -> Result<u64, IpcError>
+fn serve_one<C>(
+    c: &mut C,
+    node: &Node<ipc::Service>,
+    names: &ServiceNames,
+    identity: &str,
+) -> Result<u64, IpcError>
 where
     C: Component,
     C::Input: ZeroCopySend + Copy + std::fmt::Debug + Default + 'static,
     C::Output: ZeroCopySend + Copy + std::fmt::Debug + Default + 'static,
 {
-    serve(c, node, names, &IpcSettings::default())
+    serve(c, node, names, &IpcSettings::default(), identity)
 }
 
 /// Run `plamo component`.
@@ -100,6 +107,7 @@ pub fn run(args: ComponentArgs) -> anyhow::Result<ExitCode> {
         .create::<ipc::Service>()
         .map_err(|e| anyhow::anyhow!("creating the component's node: {e:?}"))?;
     let names = ServiceNames::new(&run, args.kind, args.agent);
+    let identity = spec.identity();
     let served = match args.kind {
         ComponentKind::Physics => {
             let inner = spec.physics(&scene)?;
@@ -119,14 +127,24 @@ pub fn run(args: ComponentArgs) -> anyhow::Result<ExitCode> {
                 },
                 &node,
                 &names,
+                &identity,
             )
         }
-        ComponentKind::Planner => serve_one(&mut spec.planner(&scene, k)?, &node, &names),
-        ComponentKind::Controller => serve_one(&mut spec.controller(&scene, k)?, &node, &names),
+        ComponentKind::Planner => {
+            serve_one(&mut spec.planner(&scene, k)?, &node, &names, &identity)
+        }
+        ComponentKind::Controller => {
+            serve_one(&mut spec.controller(&scene, k)?, &node, &names, &identity)
+        }
     };
     drop(node);
     match served {
-        Ok(_) => Ok(ExitCode::SUCCESS),
+        Ok(_) => {
+            // The last one out of a run whose orchestrator did not start it (attached
+            // by hand) removes the run's last file.
+            let _ = end_run(&cfg);
+            Ok(ExitCode::SUCCESS)
+        }
         Err(e) => {
             // The orchestrator is gone: tidy what it left; the last one out removes
             // the run's last file.

@@ -31,12 +31,12 @@ enum Command {
     /// Run planner, controller and physics in lockstep: the humanoid carries out the
     /// instructions; a summary per instruction follows.
     Run(run::RunArgs),
-    /// Serve one component over iceoryx2 (started by `plamo run --processes`).
-    #[command(hide = true)]
+    /// Serve one component of a multi-process run over iceoryx2 (`plamo run
+    /// --processes` starts these; with `--attach` you start them yourself).
     Component(component::ComponentArgs),
     /// Tune the model-based gait's parameters by CMA-ES over rollouts.
     Tune(tune::TuneArgs),
-    /// Evaluate the controller (paper Table 2).
+    /// Evaluate: the controller (paper Table 2) and the paper's experiments.
     #[command(subcommand)]
     Eval(eval::EvalCommand),
     /// Build the FMI 2.0 co-simulation FMUs.

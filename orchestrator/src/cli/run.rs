@@ -16,7 +16,7 @@ use serde::Serialize;
 
 use plamo::ipc::IpcSettings;
 use plamo::lockstep::{InstructionReport, Lockstep, StepStatus, median_p99, pace};
-use plamo::processes::ProcessRun;
+use plamo::processes::{Launch, ProcessRun, component_args};
 use plamo::record::Recorder;
 use plamo::spec::RunSpec;
 use plamo::viz::{ColorBar, MapOverlay, OverlayMarker, OverlayPath, render_map};
@@ -73,6 +73,13 @@ pub struct RunArgs {
     /// Run planner, controller and physics as separate processes over iceoryx2.
     #[arg(long)]
     processes: bool,
+    /// With --processes: do not spawn the components; print the `plamo component`
+    /// commands and wait for them to be started by hand.
+    #[arg(long, requires = "processes")]
+    attach: bool,
+    /// With --attach: how long to wait for the components to come up [s].
+    #[arg(long, default_value_t = 300.0, requires = "attach")]
+    attach_timeout: f64,
     /// Pace the simulation to the wall clock (only sleeps; results are unchanged).
     #[arg(long)]
     realtime: bool,
@@ -117,6 +124,25 @@ struct AgentJson<'a> {
     agent: usize,
     instructions: Vec<String>,
     results: &'a [InstructionReport],
+}
+
+/// A command line a POSIX shell reads back as `program` and `args`.
+fn shell_words(program: &str, args: &[String]) -> String {
+    let quote = |w: &str| {
+        if !w.is_empty()
+            && w.bytes()
+                .all(|b| b.is_ascii_alphanumeric() || b"-_./=@:,".contains(&b))
+        {
+            w.to_string()
+        } else {
+            format!("'{}'", w.replace('\'', r"'\''"))
+        }
+    };
+    std::iter::once(program)
+        .chain(args.iter().map(String::as_str))
+        .map(quote)
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 fn generated_run_id() -> String {
@@ -166,13 +192,29 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
     let wall = Instant::now();
     let (links, procs) = if args.processes {
         let exe = std::env::current_exe().context("locating the plamo executable")?;
-        let (procs, links) = ProcessRun::start(
-            &spec,
-            &run_id,
-            &exe,
-            IpcSettings::default(),
-            args.inject_fault.as_deref(),
-        )?;
+        let launch = if args.attach {
+            eprintln!("run `{run_id}`: start each component, e.g. in its own terminal:");
+            for (_, _, a) in component_args(&spec, &run_id) {
+                eprintln!("  {}", shell_words(&exe.display().to_string(), &a));
+            }
+            Launch::Attach
+        } else {
+            Launch::Spawn {
+                exe: &exe,
+                physics_fault: args.inject_fault.as_deref(),
+            }
+        };
+        let mut settings = IpcSettings::default();
+        if args.attach {
+            if !(args.attach_timeout.is_finite() && args.attach_timeout > 0.0) {
+                anyhow::bail!(
+                    "--attach-timeout {}: must be a positive number of seconds",
+                    args.attach_timeout
+                );
+            }
+            settings.ready_timeout = std::time::Duration::from_secs_f64(args.attach_timeout);
+        }
+        let (procs, links) = ProcessRun::launch(&spec, &run_id, launch, settings)?;
         for stale in &procs.cleaned {
             eprintln!(
                 "removed {} stale shared-memory file(s) of crashed run `{}`",

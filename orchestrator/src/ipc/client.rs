@@ -59,12 +59,21 @@ where
         &self.name
     }
 
-    /// Wait for the component's ready frame.
-    pub fn wait_ready(&mut self) -> Result<(), IpcError> {
+    /// Wait for the component's ready frame; it must carry `identity` (the run the
+    /// component was built for), else [`IpcError::Mismatch`].
+    pub fn wait_ready(&mut self, identity: &str) -> Result<(), IpcError> {
         let start = Instant::now();
         loop {
             if let Some(frame) = self.channels.receive_within(self.settings.slice)? {
                 if frame.kind() == Some(EnvelopeKind::Ready) {
+                    let got = frame.error_text();
+                    if got != identity {
+                        return Err(IpcError::Mismatch {
+                            component: self.name.clone(),
+                            expected: identity.to_owned(),
+                            got,
+                        });
+                    }
                     // Drain duplicates so they don't precede the first response.
                     while self.channels.try_receive()?.is_some() {}
                     return Ok(());

@@ -38,7 +38,8 @@ pub struct Envelope<T: ZeroCopySend + Copy> {
     pub kind: u32,
     /// Valid bytes of `error`.
     pub error_len: u32,
-    /// UTF-8 error text for [`EnvelopeKind::Error`].
+    /// UTF-8 text: the error for [`EnvelopeKind::Error`], the component's identity
+    /// (what run it was started for) for [`EnvelopeKind::Ready`].
     pub error: [u8; ERROR_CAPACITY],
     /// The message.
     pub payload: T,
@@ -58,7 +59,16 @@ impl<T: ZeroCopySend + Copy + Default> Envelope<T> {
 
     /// An error frame; the text is cut at a character boundary to fit.
     pub fn error(tick: u64, text: &str) -> Self {
-        let mut e = Self::new(EnvelopeKind::Error, tick, T::default());
+        Self::with_text(EnvelopeKind::Error, tick, text)
+    }
+
+    /// A ready frame carrying the component's identity.
+    pub fn ready(tick: u64, identity: &str) -> Self {
+        Self::with_text(EnvelopeKind::Ready, tick, identity)
+    }
+
+    fn with_text(kind: EnvelopeKind, tick: u64, text: &str) -> Self {
+        let mut e = Self::new(kind, tick, T::default());
         let mut n = text.len().min(ERROR_CAPACITY);
         while !text.is_char_boundary(n) {
             n -= 1;

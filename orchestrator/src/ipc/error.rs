@@ -61,6 +61,19 @@ pub enum IpcError {
         /// The component's error message.
         message: String,
     },
+    /// A component started by hand was started for another run than this one.
+    #[error(
+        "{component} was started for another run: it has `{got}`, this run is `{expected}`; \
+         start it with the command this run printed"
+    )]
+    Mismatch {
+        /// Which component.
+        component: String,
+        /// This run's identity.
+        expected: String,
+        /// The component's.
+        got: String,
+    },
     /// The orchestrator asked the component to stop.
     #[error("shutdown requested")]
     Shutdown,

@@ -44,13 +44,15 @@ fn orchestrator_alive(cfg: &Config) -> bool {
 }
 
 /// Serve `component` on `names` until the orchestrator says shutdown (Ok), dies, or
-/// the process is asked to terminate (Err). Announces readiness until the first
-/// request arrives, because frames sent before the peer's ports exist are lost.
+/// the process is asked to terminate (Err). Announces readiness, with `identity`
+/// (what run the component was built for; the orchestrator checks it), until the
+/// first request arrives, because frames sent before the peer's ports exist are lost.
 pub fn serve<C>(
     component: &mut C,
     node: &Node<ipc::Service>,
     names: &ServiceNames,
     settings: &IpcSettings,
+    identity: &str,
 ) -> Result<u64, IpcError>
 where
     C: Component,
@@ -66,14 +68,14 @@ where
     )?;
     let mut served = 0u64;
     let mut idle_slices = 0u32;
-    ch.signal(EnvelopeKind::Ready, READY_TICK)?;
+    ch.send(Envelope::ready(READY_TICK, identity))?;
     loop {
         let Some(frame) = ch.receive_within(settings.slice)? else {
             if node.wait(Duration::ZERO).is_err() {
                 return Err(IpcError::Shutdown);
             }
             if served == 0 {
-                ch.signal(EnvelopeKind::Ready, READY_TICK)?;
+                ch.send(Envelope::ready(READY_TICK, identity))?;
             }
             idle_slices += 1;
             if idle_slices.is_multiple_of(LIVENESS_EVERY) && !orchestrator_alive(node.config()) {
