@@ -29,3 +29,34 @@ python3 -m pip install --quiet --disable-pip-version-check "fmpy==0.3.32"
 cargo build --quiet --locked -p plamo-fmu
 cargo run --quiet --locked --all-features -- fmu build --out target/fmu-test
 python3 fmus/tests/fmpy_host.py target/fmu-test
+
+# ---- Replay exports and viewer (issue 9) ----------------------------------------
+# The real tools check the exports of the playground route on both backends: the
+# Khronos glTF validator (npm), an independent BVH reader (PyPI `bvh`), and Debian's
+# headless Chromium (never a downloaded browser build) driving the viewer page
+# through playwright-core.
+echo "== replay exports and viewer: glTF validator, BVH reader, headless Chromium"
+if ! command -v chromium >/dev/null; then
+    sudo_=""
+    [ "$(id -u)" -eq 0 ] || sudo_="sudo"
+    $sudo_ apt-get update -qq
+    $sudo_ apt-get install -y -qq --no-install-recommends chromium >/dev/null
+fi
+python3 -m pip install --quiet --disable-pip-version-check "bvh==0.3"
+PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --prefix orchestrator/viewer --no-audit --no-fund --loglevel=error
+npm run --silent build --prefix orchestrator/viewer
+viewer_out=target/viewer-test
+rm -rf "$viewer_out"
+for physics in rapier mujoco; do
+    # The route times out by design (exit status 1, see README); anything else fails.
+    status=0
+    cargo run --quiet --locked --all-features -- run --scene playground --quiet \
+        --instructions "Run from the tree to the car, then crawl to the bench" \
+        --max-seconds 8 --physics "$physics" --out "$viewer_out/$physics" || status=$?
+    [ "$status" -le 1 ] && [ -f "$viewer_out/$physics/replay.glb" ]
+done
+node orchestrator/viewer/test/validate-gltf.mjs "$viewer_out"/*/replay.glb
+python3 orchestrator/tests/viewer/check_bvh.py "$viewer_out/rapier" "$viewer_out/mujoco"
+cargo run --quiet --locked --all-features -- view "$viewer_out/rapier" "$viewer_out/mujoco" \
+    --write-html "$viewer_out/view.html"
+node orchestrator/viewer/test/browser.mjs "$viewer_out/view.html" "$viewer_out/screenshots"

@@ -109,7 +109,7 @@ fn to3(v: &[f32]) -> [f64; 3] {
 /// translation and rotation, composed down the node tree from the pelvis to the head,
 /// then the head centre (0, 0, 0.08) in the head frame. It must land on the head
 /// position the physics recorded in trajectory.csv.
-fn check_animation(dir: &Path) {
+fn check_animation(dir: &Path, tolerance: f64) {
     let (doc, bin) = parse_glb(&std::fs::read(dir.join("replay.glb")).unwrap());
     let nodes = doc["nodes"].as_array().unwrap();
     let find = |name: &str| {
@@ -182,10 +182,9 @@ fn check_animation(dir: &Path) {
             .sqrt();
         worst = worst.max(err);
     }
-    // Joint slack in the physics and f32 storage: millimetres, not centimetres.
     assert!(
-        worst < 0.01,
-        "head from the glTF hierarchy is {worst} m off"
+        worst < tolerance,
+        "head from the glTF hierarchy is {worst} m off (allowed {tolerance} m)"
     );
 }
 
@@ -193,12 +192,14 @@ fn run_plamo(args: &[&str]) -> Output {
     Command::new(BIN).args(args).output().unwrap()
 }
 
-fn check_backend(physics: &str) {
+/// `tolerance`: how far the recorded head may be from the one recomposed from the
+/// recorded joint state \[m\].
+fn check_backend(physics: &str, tolerance: f64) {
     let a = out_dir(&format!("{physics}-a"));
     let b = out_dir(&format!("{physics}-b"));
     record(physics, &a);
     record(physics, &b);
-    check_animation(&a);
+    check_animation(&a, tolerance);
     for f in ["replay.glb", "motion.bvh", "trajectory.csv", "scene.json"] {
         assert!(
             std::fs::read(a.join(f)).unwrap() == std::fs::read(b.join(f)).unwrap(),
@@ -228,13 +229,16 @@ fn check_backend(physics: &str) {
 
 #[test]
 fn rapier_run_exports_a_glb_whose_animation_puts_the_head_where_physics_did() {
-    check_backend("rapier");
+    // Same joint state, f32 storage: well under a millimetre.
+    check_backend("rapier", 0.0005);
 }
 
 #[cfg(feature = "mujoco")]
 #[test]
 fn mujoco_run_exports_a_glb_whose_animation_puts_the_head_where_physics_did() {
-    check_backend("mujoco");
+    // MuJoCo reports body poses from before its last integration step, so its head
+    // lags the joint state by one 120 Hz step (up to ~2.5 cm at walking speed).
+    check_backend("mujoco", 0.04);
 }
 
 #[test]

@@ -137,6 +137,7 @@ async function main() {
   const controls = new OrbitControls(camera, renderer.domElement);
   controls.enableDamping = true;
   controls.maxPolarAngle = Math.PI * 0.495;
+  controls.maxDistance = 90;
 
   // Z-up world coordinates to three.js scene coordinates.
   const toScene = (p) => new THREE.Vector3(p[0], p[2], -p[1]);
@@ -152,6 +153,13 @@ async function main() {
         o.receiveShadow = true;
       }
     });
+    // The HTML labels name the landmarks here; the glTF's marker pins (for other
+    // glTF viewers) would only stand in the way of the follow camera.
+    const markers = [];
+    root.traverse((o) => {
+      if (/marker$/.test(o.name)) markers.push(o);
+    });
+    for (const m of markers) m.visible = false;
     if (r > 0) {
       // Later runs share the scene: show only their humanoids, tinted in the run's colour.
       const keep = new Set();
@@ -206,7 +214,7 @@ async function main() {
 
   // Landmark names, positioned over their markers every frame.
   const labels = DATA.runs[0].landmarks.map((l) => ({
-    pos: toScene([l.pos[0], l.pos[1], l.pos[2] + 2.95]),
+    pos: toScene([l.pos[0], l.pos[1], l.pos[2] + 0.3]),
     div: el("div", { class: "label", text: l.name }),
   }));
 
@@ -329,7 +337,7 @@ async function main() {
 
   const tmp = new THREE.Vector3();
   let last = performance.now();
-  let hudTick = 0;
+  let hudTime = -1;
   function animate(now) {
     const dt = Math.min((now - last) / 1000, 0.1);
     last = now;
@@ -364,7 +372,10 @@ async function main() {
         l.div.style.top = `${((1 - tmp.y) / 2) * window.innerHeight}px`;
       }
     }
-    if (playing || hudTick++ % 10 === 0) updateHud();
+    if (time !== hudTime) {
+      hudTime = time;
+      updateHud();
+    }
     renderer.render(scene, camera);
     requestAnimationFrame(animate);
   }
