@@ -12,9 +12,10 @@ mod timing;
 
 pub use component::{Component, ComponentError, Outcome};
 pub use messages::{
-    AgentAction, ControllerInput, ControllerOutput, HEIGHT_MAP_SAMPLES, HumanoidState, MAX_AGENTS,
-    MAX_BODIES, MAX_JOINTS, MAX_OBSTACLES, ObstacleSample, PLAN_WAYPOINT_DT, PLAN_WAYPOINTS,
-    PhysicsInput, PhysicsOutput, PlanMessage, PlanWaypoint, PlannerInput,
+    ACTION_RESET, ACTION_TRACK, AgentAction, ControllerInput, ControllerOutput, HEIGHT_MAP_SAMPLES,
+    HumanoidState, MAX_AGENTS, MAX_BODIES, MAX_JOINTS, MAX_OBSTACLES, ObstacleSample,
+    PHYSICS_OBSERVE, PHYSICS_STEP, PLAN_WAYPOINT_DT, PLAN_WAYPOINTS, PhysicsInput, PhysicsOutput,
+    PlanMessage, PlanWaypoint, PlannerInput,
 };
 pub use naming::{ComponentKind, RunId, ServiceNames};
 pub use timing::{CONTROL_DT, CONTROL_HZ, PHYSICS_DT, PHYSICS_HZ, PHYSICS_STEPS_PER_CONTROL, Tick};

@@ -113,6 +113,17 @@ impl Default for PhysicsOutput {
     }
 }
 
+/// [`AgentAction::command`]: drive the joints to `pd_targets` (and apply the wrench).
+pub const ACTION_TRACK: u32 = 1;
+/// [`AgentAction::command`]: put the humanoid back standing where it is, at rest (how
+/// the orchestrator recovers a fallen humanoid); targets are ignored.
+pub const ACTION_RESET: u32 = 2;
+/// [`PhysicsInput::mode`]: step nothing, report the world at its current tick (the
+/// orchestrator's first read). Zero, so a zeroed input can never move the world.
+pub const PHYSICS_OBSERVE: u32 = 0;
+/// [`PhysicsInput::mode`]: apply every agent's action and take four 1/120 s steps.
+pub const PHYSICS_STEP: u32 = 1;
+
 /// One humanoid's actuation for the next control period.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
 #[repr(C)]
@@ -124,6 +135,11 @@ pub struct AgentAction {
     pub agent: u32,
     /// Valid entries of `pd_targets`.
     pub joint_count: u32,
+    /// What to do: [`ACTION_TRACK`] or [`ACTION_RESET`]; 0 (a zeroed action) is
+    /// refused, so an action nobody filled in is an error, not a silent reset.
+    pub command: u32,
+    /// Zero; keeps the layout free of padding.
+    pub reserved: u32,
     /// PD target angle per joint \[rad\].
     pub pd_targets: [f64; MAX_JOINTS],
     /// Residual root wrench, world frame: force \[N\] then torque \[N m\]; zeros when
@@ -137,6 +153,8 @@ impl Default for AgentAction {
             tick: 0,
             agent: 0,
             joint_count: 0,
+            command: 0,
+            reserved: 0,
             pd_targets: [0.0; MAX_JOINTS],
             root_wrench: [0.0; 6],
         }
@@ -155,6 +173,10 @@ pub struct PhysicsInput {
     pub agent_count: u32,
     /// Valid entries of `external_obstacles`.
     pub external_count: u32,
+    /// [`PHYSICS_OBSERVE`] (the default) or [`PHYSICS_STEP`].
+    pub mode: u32,
+    /// Zero; keeps the layout free of padding.
+    pub reserved: u32,
     /// One action per humanoid.
     pub actions: [AgentAction; MAX_AGENTS],
     /// Externally driven obstacles' states for this period.
@@ -167,6 +189,8 @@ impl Default for PhysicsInput {
             tick: 0,
             agent_count: 0,
             external_count: 0,
+            mode: PHYSICS_OBSERVE,
+            reserved: 0,
             actions: [AgentAction::default(); MAX_AGENTS],
             external_obstacles: [ObstacleSample::default(); MAX_OBSTACLES],
         }

@@ -9,8 +9,8 @@
 //! action), so the policy forgets its gait phase.
 
 use plamo_interfaces::{
-    AgentAction, Component, ComponentError, ControllerInput, HumanoidState, MAX_JOINTS, Outcome,
-    PHYSICS_STEPS_PER_CONTROL, Tick,
+    ACTION_TRACK, AgentAction, Component, ComponentError, ControllerInput, HumanoidState,
+    MAX_JOINTS, Outcome, PHYSICS_STEPS_PER_CONTROL, Tick,
 };
 use plamo_physics::{NUM_BODIES, NUM_JOINTS};
 use plamo_scenes::Scene;
@@ -164,6 +164,7 @@ impl Component for ControllerComponent {
         output.tick = tick.0;
         output.agent = self.agent;
         output.joint_count = self.action.pd_targets.len() as u32;
+        output.command = ACTION_TRACK;
         output.pd_targets = [0.0; MAX_JOINTS];
         output.pd_targets[..self.action.pd_targets.len()].copy_from_slice(&self.action.pd_targets);
         output.root_wrench = match self.action.root_wrench {

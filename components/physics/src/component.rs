@@ -7,11 +7,13 @@
 //!   root wrench, takes [`PHYSICS_STEPS_PER_CONTROL`] steps of 1/120 s, and reports
 //!   the world at tick `c + 4`. The input's tick and the step's tick must both equal
 //!   the world's current tick, else [`ComponentError::WrongTick`].
-//! - An input with `agent_count == 0` steps nothing and reports the world at its
-//!   current tick: the orchestrator's first read, before tick 0's control step.
-//! - An action with `joint_count == 0` ([`reset_request`]) puts that agent back
+//! - An input in mode [`PHYSICS_OBSERVE`] (the default) steps nothing and reports the
+//!   world at its current tick: the orchestrator's first read, before tick 0's
+//!   control step. Mode [`PHYSICS_STEP`] applies the actions and steps.
+//! - An action with command [`ACTION_RESET`] ([`reset_request`]) puts that agent back
 //!   standing on the terrain at its current XY and heading, at rest, before the
-//!   steps (how the orchestrator recovers a fallen humanoid).
+//!   steps (how the orchestrator recovers a fallen humanoid); [`ACTION_TRACK`]
+//!   drives the joints to its PD targets. Any other command is an error.
 //! - `fallen` in each reported state uses the most lenient posture (crawl): the head
 //!   is below 0.15 m above the ground or touches the terrain. Posture-aware fall
 //!   rules belong to whoever knows the requested posture (the orchestrator).
@@ -19,8 +21,9 @@
 //!   collide with them (they are scene-independent markers for hosts).
 
 use plamo_interfaces::{
-    AgentAction, Component, ComponentError, MAX_AGENTS, MAX_BODIES, MAX_JOINTS, MAX_OBSTACLES,
-    ObstacleSample, Outcome, PHYSICS_STEPS_PER_CONTROL, PhysicsInput, PhysicsOutput, Tick,
+    ACTION_RESET, ACTION_TRACK, AgentAction, Component, ComponentError, MAX_AGENTS, MAX_BODIES,
+    MAX_JOINTS, MAX_OBSTACLES, ObstacleSample, Outcome, PHYSICS_OBSERVE, PHYSICS_STEP,
+    PHYSICS_STEPS_PER_CONTROL, PhysicsInput, PhysicsOutput, Tick,
 };
 use plamo_scenes::Scene;
 
@@ -54,6 +57,7 @@ pub fn reset_request(tick: u64, agent: u32) -> AgentAction {
         tick,
         agent,
         joint_count: 0,
+        command: ACTION_RESET,
         ..AgentAction::default()
     }
 }
@@ -179,15 +183,26 @@ impl PhysicsComponent {
     }
 
     fn apply(&mut self, agent: usize, a: &AgentAction) -> Result<(), ComponentError> {
-        if a.joint_count == 0 {
-            return self.reset_in_place(agent).map_err(failed);
+        match a.command {
+            ACTION_RESET => return self.reset_in_place(agent).map_err(failed),
+            ACTION_TRACK => {}
+            other => {
+                return Err(ComponentError::InvalidInput {
+                    component: Self::NAME,
+                    field: "actions.command",
+                    reason: format!(
+                        "agent {agent}: command {other}; expected {ACTION_TRACK} (track the PD \
+                         targets) or {ACTION_RESET} (reset standing)"
+                    ),
+                });
+            }
         }
         if a.joint_count as usize != NUM_JOINTS {
             return Err(ComponentError::InvalidInput {
                 component: Self::NAME,
                 field: "actions.joint_count",
                 reason: format!(
-                    "agent {agent}: {} joint targets, expected {NUM_JOINTS} (or 0 = reset)",
+                    "agent {agent}: {} joint targets, expected {NUM_JOINTS}",
                     a.joint_count
                 ),
             });
@@ -230,9 +245,21 @@ impl Component for PhysicsComponent {
         }
         let external_count = (input.external_count as usize).min(MAX_OBSTACLES);
         let external = &input.external_obstacles[..external_count];
-        if input.agent_count == 0 {
-            self.observe(external, output).map_err(failed)?;
-            return Ok(Outcome::Continue);
+        match input.mode {
+            PHYSICS_OBSERVE => {
+                self.observe(external, output).map_err(failed)?;
+                return Ok(Outcome::Continue);
+            }
+            PHYSICS_STEP => {}
+            other => {
+                return Err(ComponentError::InvalidInput {
+                    component: Self::NAME,
+                    field: "mode",
+                    reason: format!(
+                        "{other}; expected {PHYSICS_OBSERVE} (observe) or {PHYSICS_STEP} (step)"
+                    ),
+                });
+            }
         }
         if input.agent_count as usize != self.agents {
             return Err(ComponentError::InvalidInput {
@@ -300,12 +327,30 @@ mod tests {
         let mut input = PhysicsInput {
             tick: 0,
             agent_count: 2,
+            mode: PHYSICS_STEP,
             ..Default::default()
         };
         for (i, a) in input.actions.iter_mut().take(2).enumerate() {
             a.agent = i as u32;
             a.joint_count = NUM_JOINTS as u32;
         }
+        // An action nobody filled in (command 0) is refused, not taken as a reset.
+        assert!(matches!(
+            p.step(Tick(0), &input, &mut out),
+            Err(ComponentError::InvalidInput {
+                field: "actions.command",
+                ..
+            })
+        ));
+        for a in input.actions.iter_mut().take(2) {
+            a.command = ACTION_TRACK;
+        }
+        input.mode = 7;
+        assert!(matches!(
+            p.step(Tick(0), &input, &mut out),
+            Err(ComponentError::InvalidInput { field: "mode", .. })
+        ));
+        input.mode = PHYSICS_STEP;
         p.step(Tick(0), &input, &mut out).unwrap();
         assert_eq!(out.tick, 4);
         let err = p.step(Tick(0), &input, &mut out).unwrap_err();

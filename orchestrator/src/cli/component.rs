@@ -9,8 +9,8 @@ use anyhow::Context;
 use clap::Args;
 use iceoryx2::prelude::*;
 use plamo_interfaces::{
-    Component, ComponentError, ComponentKind, Outcome, PhysicsInput, PhysicsOutput, RunId,
-    ServiceNames, Tick,
+    Component, ComponentError, ComponentKind, Outcome, PHYSICS_STEP, PhysicsInput, PhysicsOutput,
+    RunId, ServiceNames, Tick,
 };
 use plamo_physics::PhysicsComponent;
 
@@ -56,11 +56,11 @@ impl Component for Faulty {
         input: &PhysicsInput,
         output: &mut PhysicsOutput,
     ) -> Result<Outcome, ComponentError> {
-        if self.crash_at == Some(tick.0) && input.agent_count > 0 {
+        if self.crash_at == Some(tick.0) && input.mode == PHYSICS_STEP {
             std::process::abort();
         }
         let r = self.inner.step(tick, input, output);
-        if self.wrong_tick_at == Some(tick.0) && input.agent_count > 0 {
+        if self.wrong_tick_at == Some(tick.0) && input.mode == PHYSICS_STEP {
             output.tick += 4;
         }
         r

@@ -2,7 +2,9 @@
 //! action; a fallen agent gets a reset request instead (physics stands it up where it
 //! is, and its controller sees a gap in ticks and forgets its gait phase).
 
-use plamo_interfaces::{AgentAction, ControllerInput, PhysicsInput, PhysicsOutput, PlanMessage};
+use plamo_interfaces::{
+    AgentAction, ControllerInput, PHYSICS_STEP, PhysicsInput, PhysicsOutput, PlanMessage,
+};
 use plamo_physics::reset_request;
 
 use super::{Link, RunError};
@@ -17,6 +19,7 @@ pub(crate) fn control(
     input: &mut PhysicsInput,
 ) -> Result<(), RunError> {
     input.tick = tick;
+    input.mode = PHYSICS_STEP;
     input.agent_count = controllers.len() as u32;
     for (k, controller) in controllers.iter_mut().enumerate() {
         if fallen[k] {
