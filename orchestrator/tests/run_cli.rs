@@ -94,6 +94,33 @@ fn sigkill(pid: u32) {
     );
 }
 
+/// Start a long multi-process run `run` (stdout/stderr as given) and wait until its
+/// three component processes exist.
+fn long_run_with_components(run: &str, stderr: Stdio) -> Child {
+    let orch = plamo(&[
+        "--instructions",
+        ROUTE,
+        "--max-seconds",
+        "600",
+        "--processes",
+        "--run",
+        run,
+    ])
+    .stdout(Stdio::null())
+    .stderr(stderr)
+    .spawn()
+    .unwrap();
+    let start = Instant::now();
+    while component_pids(run).len() < 3 {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "components did not start"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    orch
+}
+
 #[test]
 fn in_process_and_multi_process_runs_are_bit_identical() {
     let a = out_dir("inproc");
@@ -154,34 +181,12 @@ fn two_agents_with_their_own_instructions_run_in_both_modes() {
 #[test]
 fn a_sigkilled_component_stops_the_run_and_leaves_no_files() {
     let run = "cli-test-kill";
-    let mut orch = plamo(&[
-        "--instructions",
-        ROUTE,
-        "--max-seconds",
-        "600",
-        "--processes",
-        "--run",
-        run,
-    ])
-    .stdout(Stdio::null())
-    .stderr(Stdio::piped())
-    .spawn()
-    .unwrap();
-    // Wait until the components are up and the run has gone on for a while.
-    let start = Instant::now();
-    let physics = loop {
-        if let Some((pid, _)) = component_pids(run)
-            .into_iter()
-            .find(|(_, k)| k == "physics")
-        {
-            break pid;
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "no physics process"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    };
+    let mut orch = long_run_with_components(run, Stdio::piped());
+    let (physics, _) = component_pids(run)
+        .into_iter()
+        .find(|(_, k)| k == "physics")
+        .expect("physics process");
+    // Let the run go on for a while.
     std::thread::sleep(Duration::from_millis(1500));
     let killed_at = Instant::now();
     sigkill(physics);
@@ -252,27 +257,7 @@ fn a_wrong_tick_is_an_error() {
 #[test]
 fn components_exit_when_the_orchestrator_is_killed() {
     let run = "cli-test-orphan";
-    let mut orch = plamo(&[
-        "--instructions",
-        ROUTE,
-        "--max-seconds",
-        "600",
-        "--processes",
-        "--run",
-        run,
-    ])
-    .stdout(Stdio::null())
-    .stderr(Stdio::null())
-    .spawn()
-    .unwrap();
-    let start = Instant::now();
-    while component_pids(run).len() < 3 {
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "components did not start"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    let mut orch = long_run_with_components(run, Stdio::null());
     std::thread::sleep(Duration::from_millis(500));
     sigkill(orch.id());
     orch.wait().unwrap();
@@ -356,27 +341,7 @@ fn mujoco_without_the_feature_names_the_feature() {
 #[test]
 fn the_next_run_removes_what_a_crashed_run_of_another_id_left() {
     let run = "cli-test-crashed";
-    let mut orch = plamo(&[
-        "--instructions",
-        ROUTE,
-        "--max-seconds",
-        "600",
-        "--processes",
-        "--run",
-        run,
-    ])
-    .stdout(Stdio::null())
-    .stderr(Stdio::null())
-    .spawn()
-    .unwrap();
-    let start = Instant::now();
-    while component_pids(run).len() < 3 {
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "components did not start"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    let mut orch = long_run_with_components(run, Stdio::null());
     std::thread::sleep(Duration::from_millis(500));
     // The whole run dies at once (a power cut, `kill -9` of the process group):
     // nobody is left to tidy up.
