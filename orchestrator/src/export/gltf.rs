@@ -61,6 +61,9 @@ struct Builder {
     accessors: Vec<Value>,
     meshes: Vec<Value>,
     nodes: Vec<Value>,
+    /// Materials in order of first use (the validator flags unused ones).
+    materials: Vec<Value>,
+    material_index: [Option<usize>; MATERIALS.len()],
 }
 
 fn num(x: f32) -> Value {
@@ -129,11 +132,30 @@ impl Builder {
             attrs["COLOR_0"] = json!(self.floats(&m.colors, "VEC3", Some(ARRAY_BUFFER), false));
         }
         let ind = self.indices(&m.indices);
+        let material = self.material(mat);
         self.meshes.push(json!({
             "name": name,
-            "primitives": [{ "attributes": attrs, "indices": ind, "material": mat as usize, "mode": 4 }],
+            "primitives": [{ "attributes": attrs, "indices": ind, "material": material, "mode": 4 }],
         }));
         self.meshes.len() - 1
+    }
+
+    fn material(&mut self, mat: Mat) -> usize {
+        if let Some(i) = self.material_index[mat as usize] {
+            return i;
+        }
+        let (name, color, translucent) = MATERIALS[mat as usize];
+        let mut m = json!({
+            "name": name,
+            "pbrMetallicRoughness": { "baseColorFactor": color, "metallicFactor": 0.0, "roughnessFactor": 0.85 },
+        });
+        if translucent {
+            m["alphaMode"] = json!("BLEND");
+            m["doubleSided"] = json!(true);
+        }
+        self.materials.push(m);
+        self.material_index[mat as usize] = Some(self.materials.len() - 1);
+        self.materials.len() - 1
     }
 
     fn node(&mut self, v: Value) -> usize {
@@ -398,20 +420,6 @@ pub fn write_glb(rec: &Recording) -> Vec<u8> {
         "children": root_children,
     }));
 
-    let materials: Vec<Value> = MATERIALS
-        .iter()
-        .map(|(name, c, translucent)| {
-            let mut m = json!({
-                "name": name,
-                "pbrMetallicRoughness": { "baseColorFactor": c, "metallicFactor": 0.0, "roughnessFactor": 0.85 },
-            });
-            if *translucent {
-                m["alphaMode"] = json!("BLEND");
-                m["doubleSided"] = json!(true);
-            }
-            m
-        })
-        .collect();
     while !b.bin.len().is_multiple_of(4) {
         b.bin.push(0);
     }
@@ -425,7 +433,7 @@ pub fn write_glb(rec: &Recording) -> Vec<u8> {
         "scenes": [{ "name": scene.name, "nodes": [root] }],
         "nodes": b.nodes,
         "meshes": b.meshes,
-        "materials": materials,
+        "materials": b.materials,
         "accessors": b.accessors,
         "bufferViews": b.views,
         "buffers": [{ "byteLength": b.bin.len() }],

@@ -17,7 +17,7 @@ const css = `
 html, body { margin: 0; height: 100%; overflow: hidden; background: #9cc3e6;
   font: 14px/1.35 system-ui, -apple-system, "Segoe UI", Roboto, sans-serif; color: #eee; }
 canvas { display: block; }
-.panel { position: absolute; background: rgba(18, 22, 30, 0.78); border-radius: 8px;
+.panel { position: absolute; z-index: 2; background: rgba(18, 22, 30, 0.85); border-radius: 8px;
   padding: 10px 14px; box-shadow: 0 2px 10px rgba(0,0,0,.3); }
 #hud { top: 12px; left: 12px; min-width: 300px; max-width: 440px; }
 #hud h1 { font-size: 15px; margin: 0 0 6px 0; font-weight: 600; }
@@ -41,7 +41,7 @@ canvas { display: block; }
 #legend .row { display: flex; justify-content: space-between; }
 #legend .swatch { display: inline-block; width: 18px; height: 4px; vertical-align: middle; margin-right: 6px; }
 #help { color: #aab; font-size: 11px; margin-top: 6px; }
-.label { position: absolute; transform: translate(-50%, -100%); pointer-events: none;
+.label { position: absolute; z-index: 1; transform: translate(-50%, -100%); pointer-events: none;
   background: rgba(255, 140, 20, 0.92); color: #201000; padding: 1px 6px; border-radius: 4px;
   font-size: 12px; font-weight: 600; white-space: nowrap; }
 #error { position: absolute; inset: 0; display: none; padding: 40px; background: #300; color: #fff; }
@@ -214,7 +214,7 @@ async function main() {
 
   // Landmark names, positioned over their markers every frame.
   const labels = DATA.runs[0].landmarks.map((l) => ({
-    pos: toScene([l.pos[0], l.pos[1], l.pos[2] + 0.3]),
+    pos: toScene([l.pos[0], l.pos[1], l.pos[2] + 2.3]),
     div: el("div", { class: "label", text: l.name }),
   }));
 

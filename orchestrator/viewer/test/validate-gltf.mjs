@@ -17,7 +17,7 @@ for (const file of files) {
   const info = report.info || {};
   console.log(
     `${file}: ${numErrors} error(s), ${numWarnings} warning(s), ${numInfos} info(s); ` +
-      `${info.animationCount} animation(s), ${info.totalVertexCount} vertices, ${info.totalTriangleCount} triangles, ${info.nodeCount ?? "?"} nodes`
+      `${info.animationCount} animation(s), ${info.totalVertexCount} vertices, ${info.totalTriangleCount} triangles`
   );
   for (const m of messages) {
     if (m.severity <= 1) console.log(`  [${m.severity === 0 ? "error" : "warning"}] ${m.code} ${m.pointer ?? ""}: ${m.message}`);
