@@ -268,6 +268,26 @@ fn view_writes_one_self_contained_page_or_says_how_to_build_the_bundle() {
     assert!(html.contains("\"glb\":\"Z2xURg"));
     assert!(html.contains("run from the tree to the car"));
     assert_eq!(html.matches("</script>").count(), 2);
+    // The overlay's figures, per recorded frame: at the start the humanoid stands on
+    // the plan's first point at standing head height, in its first instruction.
+    let start = html.find("window.PLAMO_DATA = ").unwrap() + "window.PLAMO_DATA = ".len();
+    let end = start + html[start..].find(";</script>").unwrap();
+    let data: Value = serde_json::from_str(&html[start..end].replace("<\\/", "</")).unwrap();
+    let agent = &data["runs"][0]["agents"][0];
+    for key in ["t", "instruction", "speed", "head_height", "xy_err", "head"] {
+        assert_eq!(agent[key].as_array().unwrap().len(), 3 * 30 + 1, "{key}");
+    }
+    assert_eq!(agent["instruction"][0], 0);
+    assert!(
+        agent["xy_err"][0].as_f64().unwrap() < 0.05,
+        "{}",
+        agent["xy_err"][0]
+    );
+    let h0 = agent["head_height"][0].as_f64().unwrap();
+    assert!((h0 - 1.47).abs() < 0.05, "head height {h0}");
+    let t = agent["t"].as_array().unwrap();
+    assert_eq!(t.last().unwrap().as_f64(), Some(3.0));
+    assert_eq!(data["runs"][0]["landmarks"].as_array().unwrap().len(), 6);
 
     let o = Command::new(BIN)
         .args(["view", dir.to_str().unwrap(), "--write-html"])

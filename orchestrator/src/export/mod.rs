@@ -18,7 +18,7 @@ mod viewer;
 pub use bvh::write_bvh;
 pub use fk::{BodyPose, body_poses, local_rotations};
 pub use gltf::write_glb;
-pub use recording::{AgentFrame, ObstacleFrame, PlannedPoint, Recording};
+pub use recording::{AgentFrame, AgentTrack, ObstacleFrame, PlannedPoint, Recording};
 pub use viewer::{
     BUILD_COMMAND, BUNDLE_PATH, ViewerBundle, viewer_data, viewer_html, write_viewer,
 };

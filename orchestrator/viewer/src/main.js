@@ -352,13 +352,16 @@ async function main() {
     for (const r of runs) r.mixer.setTime(Math.min(time, Math.max(r.duration - 1e-6, 0)));
     scene.updateMatrixWorld();
     if (firstPelvis) {
+      // Glide after the pelvis (no step bobbing or jumps when scrubbing); the camera
+      // keeps its offset, so orbiting and zooming still work while following.
       firstPelvis.getWorldPosition(tmp);
+      const next = lastFocus.clone().lerp(tmp, 1 - Math.exp(-6 * dt));
       if (follow) {
-        const d = tmp.clone().sub(lastFocus);
+        const d = next.clone().sub(lastFocus);
         camera.position.add(d);
         controls.target.add(d);
       }
-      lastFocus.copy(tmp);
+      lastFocus.copy(next);
       sun.position.copy(tmp).add(new THREE.Vector3(-8, 18, 6));
       sun.target.position.copy(tmp);
     }
