@@ -349,7 +349,10 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         )?;
         plamo::record::write_scene(dir, &scene)?;
         plamo::export::export_dir(dir)?;
-        println!("wrote {}", dir.display());
+        println!(
+            "wrote {} (replay.glb, motion.bvh; watch it: plamo view {0})",
+            dir.display()
+        );
     }
     Ok(if all_ok {
         ExitCode::SUCCESS
