@@ -191,7 +191,9 @@ async function main() {
       root.traverse((o) => {
         if (o.userData.agent === k) group = o;
       });
-      const pelvis = group ? group.getObjectByName("pelvis") : null;
+      // The pelvis is the agent node's only child (names repeat across agents, and
+      // GLTFLoader makes them unique with suffixes).
+      const pelvis = group ? group.children[0] ?? null : null;
       // Planned head path, coloured by planned speed, one polyline per instruction.
       for (const seg of a.plan) {
         if (seg.length < 2) continue;
@@ -246,6 +248,21 @@ async function main() {
   const scrub = el("input", { id: "scrub", type: "range", min: "0", max: String(duration), step: "0.001", value: "0" }, bar);
   const clock = el("span", { id: "clock" }, bar);
   const followBtn = el("button", { id: "follow", class: "on", text: "Follow" }, bar);
+  // Whom the follow camera follows, when there is more than one humanoid.
+  const targets = runs.flatMap((r, ri) =>
+    r.agents
+      .filter((a) => a.pelvis)
+      .map((a, k) => ({ pelvis: a.pelvis, label: `${r.run.physics}${runs.length > 1 ? ` (${r.run.name})` : ""} · agent ${k}` }))
+  );
+  let followed = targets[0]?.pelvis;
+  if (targets.length > 1) {
+    const sel = el("select", { id: "target", title: "humanoid to follow" }, bar);
+    targets.forEach((t, i) => el("option", { value: String(i), text: t.label }, sel));
+    sel.onchange = () => {
+      followed = targets[Number(sel.value)].pelvis;
+      setFollow(true);
+    };
+  }
   const orbitBtn = el("button", { id: "orbit", text: "Free orbit" }, bar);
 
   let time = 0;
@@ -279,7 +296,7 @@ async function main() {
 
   // Start behind and above the first humanoid, looking along its first path.
   const focus = new THREE.Vector3();
-  const firstPelvis = runs[0].agents[0]?.pelvis;
+  const firstPelvis = followed;
   runs.forEach((r) => r.mixer.setTime(0));
   scene.updateMatrixWorld(true);
   if (firstPelvis) firstPelvis.getWorldPosition(focus);
@@ -351,10 +368,10 @@ async function main() {
     }
     for (const r of runs) r.mixer.setTime(Math.min(time, Math.max(r.duration - 1e-6, 0)));
     scene.updateMatrixWorld();
-    if (firstPelvis) {
+    if (followed) {
       // Glide after the pelvis (no step bobbing or jumps when scrubbing); the camera
       // keeps its offset, so orbiting and zooming still work while following.
-      firstPelvis.getWorldPosition(tmp);
+      followed.getWorldPosition(tmp);
       const next = lastFocus.clone().lerp(tmp, 1 - Math.exp(-6 * dt));
       if (follow) {
         const d = next.clone().sub(lastFocus);
