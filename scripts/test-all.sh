@@ -36,11 +36,15 @@ python3 fmus/tests/fmpy_host.py target/fmu-test
 # headless Chromium (never a downloaded browser build) driving the viewer page
 # through playwright-core.
 echo "== replay exports and viewer: glTF validator, BVH reader, headless Chromium"
-if ! command -v chromium >/dev/null; then
+viewer_apt=""
+command -v chromium >/dev/null || viewer_apt="chromium"
+command -v npm >/dev/null || viewer_apt="$viewer_apt nodejs npm"
+if [ -n "$viewer_apt" ]; then
     sudo_=""
     [ "$(id -u)" -eq 0 ] || sudo_="sudo"
     $sudo_ apt-get update -qq
-    $sudo_ apt-get install -y -qq --no-install-recommends chromium >/dev/null
+    # shellcheck disable=SC2086  # a list of package names
+    $sudo_ apt-get install -y -qq --no-install-recommends $viewer_apt >/dev/null
 fi
 python3 -m pip install --quiet --disable-pip-version-check "bvh==0.3"
 PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --prefix orchestrator/viewer --no-audit --no-fund --loglevel=error
@@ -53,7 +57,10 @@ for physics in rapier mujoco; do
     cargo run --quiet --locked --all-features -- run --scene playground --quiet \
         --instructions "Run from the tree to the car, then crawl to the bench" \
         --max-seconds 8 --physics "$physics" --out "$viewer_out/$physics" || status=$?
-    [ "$status" -le 1 ] && [ -f "$viewer_out/$physics/replay.glb" ]
+    if [ "$status" -gt 1 ] || [ ! -f "$viewer_out/$physics/replay.glb" ]; then
+        echo "plamo run --physics $physics failed (status $status) or wrote no replay.glb"
+        exit 1
+    fi
 done
 node orchestrator/viewer/test/validate-gltf.mjs "$viewer_out"/*/replay.glb
 python3 orchestrator/tests/viewer/check_bvh.py "$viewer_out/rapier" "$viewer_out/mujoco"
