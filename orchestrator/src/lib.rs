@@ -3,6 +3,7 @@
 #![warn(missing_docs)]
 
 pub mod export;
+pub mod eval;
 pub mod fmu_package;
 pub mod ipc;
 pub mod lockstep;

@@ -3,6 +3,9 @@
 //! @ 2 m/s, walk 1.47 m @ 2 m/s, run 1.47 m @ 4 m/s), straight paths with constant speed
 //! and head height along the terrain strip; prints mean XY/Z errors next to the
 //! paper's, fall rate and residual; writes markdown and a bar plot.
+//!
+//! The paper's other experiments (`slalom`, `pyramid`, `random`, `dynamic`) and
+//! `merge` live in [`plamo::eval`]; here are only their arguments.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -10,6 +13,11 @@ use std::process::ExitCode;
 use anyhow::Context;
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use plamo::eval::dynamic::Dynamic;
+use plamo::eval::pyramid::{self, Pyramid};
+use plamo::eval::random::RandomScenes;
+use plamo::eval::slalom::{self, QpConfig, Slalom};
+use plamo::eval::{self, Experiment, RunOptions, Shard};
 use plamo::viz::{FAMILY, ensure_registered};
 use plamo_controller::{
     ControllerSettings, GaitParams, MetricsSummary, ModelBasedController, StraightPath, flat_scene,
@@ -25,6 +33,139 @@ use rayon::prelude::*;
 pub enum EvalCommand {
     /// Table 2: terrain x locomotion form tracking errors.
     Locomotion(LocomotionArgs),
+    /// Slalom: constant speeds vs the speed QP; Pareto plots (failure, error vs time).
+    Slalom(SlalomArgs),
+    /// Pyramid: path length and time with terrain preference c = 0 vs larger c.
+    Pyramid(PyramidArgs),
+    /// Random 4-landmark scenes: success rate (Wilson interval), failure causes.
+    Random(RandomArgs),
+    /// Moving obstacles crossing the way: collision rate, re-planning on vs off.
+    Dynamic(DynamicArgs),
+    /// Combine the shard folders of one sweep (`--shard i/n`) into one result.
+    Merge(MergeArgs),
+}
+
+/// Arguments every experiment sweep takes.
+#[derive(Debug, Args)]
+pub struct SweepArgs {
+    /// Physics engine: rapier, or mujoco (build with `--features mujoco`).
+    #[arg(long, default_value = "rapier")]
+    physics: BackendKind,
+    /// Output folder (created); default: eval-<experiment>.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Run only part i of n of the sweep (e.g. 2/4); combine with `plamo eval merge`.
+    #[arg(long)]
+    shard: Option<Shard>,
+    /// Worker threads (0: one per core). Results do not depend on it.
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Cap every run's simulated time [s] (quick looks and tests).
+    #[arg(long)]
+    max_seconds: Option<f64>,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+impl SweepArgs {
+    fn options(&self, name: &str) -> RunOptions {
+        RunOptions {
+            physics: self.physics,
+            out: self
+                .out
+                .clone()
+                .unwrap_or_else(|| PathBuf::from(format!("eval-{name}"))),
+            shard: self.shard.unwrap_or(Shard::ALL),
+            threads: self.threads,
+            max_seconds: self.max_seconds,
+            quiet: self.quiet,
+        }
+    }
+}
+
+/// Arguments of `plamo eval slalom`.
+#[derive(Debug, Args)]
+pub struct SlalomArgs {
+    #[command(flatten)]
+    sweep: SweepArgs,
+    /// Runs per point (paper: 100).
+    #[arg(long, default_value_t = 10)]
+    runs: usize,
+    /// Seed of the first run (run r: seed + r).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Constant speeds [m/s], comma-separated (default 1,1.5,2,2.5,3,3.5).
+    #[arg(long, value_delimiter = ',')]
+    speeds: Option<Vec<f64>>,
+    /// Speed-QP configurations V_MAX:A_LAT:A_MAX[:A_MIN], comma-separated
+    /// (default: see `plamo::eval::slalom::DEFAULT_QP`).
+    #[arg(long, value_delimiter = ',')]
+    qp: Option<Vec<QpConfig>>,
+}
+
+/// Arguments of `plamo eval pyramid`.
+#[derive(Debug, Args)]
+pub struct PyramidArgs {
+    #[command(flatten)]
+    sweep: SweepArgs,
+    /// Runs per terrain preference.
+    #[arg(long, default_value_t = 4)]
+    runs: usize,
+    /// Seed of the first run (run r: seed + r).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Terrain preferences c, comma-separated (default 0,0.5,1,4).
+    #[arg(long, value_delimiter = ',')]
+    c: Option<Vec<f64>>,
+}
+
+/// Arguments of `plamo eval random`.
+#[derive(Debug, Args)]
+pub struct RandomArgs {
+    #[command(flatten)]
+    sweep: SweepArgs,
+    /// Number of random scenes.
+    #[arg(long, default_value_t = 50)]
+    scenes: usize,
+    /// Seed of the first scene (scene k: `plamo scenes random --seed S+k`).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+}
+
+/// Arguments of `plamo eval dynamic`.
+#[derive(Debug, Args)]
+pub struct DynamicArgs {
+    #[command(flatten)]
+    sweep: SweepArgs,
+    /// Number of corridor scenes (each run with re-planning on and off).
+    #[arg(long, default_value_t = 20)]
+    scenes: usize,
+    /// Seed of the first scene.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+}
+
+/// Arguments of `plamo eval merge`.
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// The shard folders, one per shard of the sweep.
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+    /// Output folder of the combined result (created).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+fn report(md: anyhow::Result<String>, out: &std::path::Path) -> anyhow::Result<ExitCode> {
+    println!("{}", md?);
+    println!("wrote {}", out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+fn sweep<E: Experiment>(e: &E, a: &SweepArgs) -> anyhow::Result<ExitCode> {
+    let opts = a.options(E::NAME);
+    report(eval::run(e, &opts), &opts.out)
 }
 
 /// Arguments of `plamo eval locomotion`.
@@ -80,6 +221,26 @@ struct Cell {
 pub fn run(cmd: EvalCommand) -> anyhow::Result<ExitCode> {
     match cmd {
         EvalCommand::Locomotion(a) => locomotion(a),
+        EvalCommand::Slalom(a) => sweep(
+            &Slalom::new(
+                a.runs,
+                a.seed,
+                a.speeds.unwrap_or_else(|| slalom::DEFAULT_SPEEDS.to_vec()),
+                a.qp.unwrap_or_else(|| slalom::DEFAULT_QP.to_vec()),
+            )?,
+            &a.sweep,
+        ),
+        EvalCommand::Pyramid(a) => sweep(
+            &Pyramid::new(
+                a.runs,
+                a.seed,
+                a.c.unwrap_or_else(|| pyramid::DEFAULT_C.to_vec()),
+            )?,
+            &a.sweep,
+        ),
+        EvalCommand::Random(a) => sweep(&RandomScenes::new(a.scenes, a.seed)?, &a.sweep),
+        EvalCommand::Dynamic(a) => sweep(&Dynamic::new(a.scenes, a.seed)?, &a.sweep),
+        EvalCommand::Merge(a) => report(eval::merge(&a.dirs, &a.out), &a.out),
     }
 }
 

@@ -1,0 +1,281 @@
+//! One closed-loop run for the experiments: planner (with the experiment's
+//! [`PlannerSettings`]), controller and physics in lockstep in this process, exactly
+//! as `plamo run` builds them from a [`RunSpec`] except for the planner settings,
+//! plus what the experiments measure beyond the lockstep's per-instruction report:
+//! collisions with walls, ceilings and moving obstacles, and the head's track.
+//! A wall or ceiling is touched when physics reports a body in contact close to one
+//! ([`STATIC_ATTRIBUTION`]); a moving obstacle when a body comes within
+//! [`BODY_RADIUS`] of its surface (obstacles are kinematic: they push, never stop).
+
+use plamo_controller::ControllerSettings;
+use plamo_physics::BackendKind;
+use plamo_planner::{FLAG_INFEASIBLE, FLAG_REPLANNED, Planner, PlannerComponent, PlannerSettings};
+use plamo_scenes::{ObstacleShape, Scene};
+
+use crate::lockstep::{InProcess, Links, Lockstep, RunError, StepStatus};
+use crate::spec::RunSpec;
+
+/// Radius around a body's origin taken as its surface when checking contact with
+/// moving obstacles \[m\] (the humanoid's limb capsules are
+/// 0.04-0.1 m thick; body positions are their origins).
+pub const BODY_RADIUS: f64 = 0.1;
+
+/// Head track sampling period \[s\].
+const TRACK_DT: f64 = 0.5;
+
+/// Default simulated-time limit of a run: this many times the planned route time...
+pub const TIME_LIMIT_FACTOR: f64 = 2.0;
+/// ... plus this much \[s\].
+pub const TIME_LIMIT_EXTRA: f64 = 15.0;
+
+/// What a run is.
+#[derive(Debug, Clone)]
+pub struct EpisodeSpec<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// Instruction text; the first must say where it starts ("from the <landmark>").
+    pub instructions: String,
+    /// Physics engine.
+    pub backend: BackendKind,
+    /// Seed of the start-heading perturbation ([`RunSpec::seed`]).
+    pub seed: u64,
+    /// Planner parameters.
+    pub planner: PlannerSettings,
+    /// Simulated-time limit \[s\]; `None`: [`TIME_LIMIT_FACTOR`] x planned time +
+    /// [`TIME_LIMIT_EXTRA`].
+    pub max_seconds: Option<f64>,
+}
+
+/// What a run did.
+#[derive(Debug, Clone, Default)]
+pub struct Episode {
+    /// The planner could not plan the route at the start (the message).
+    pub planning_error: Option<String>,
+    /// A component failed during the run (the message).
+    pub run_error: Option<String>,
+    /// Instructions in the text.
+    pub instructions: usize,
+    /// Instructions whose target was reached.
+    pub reached: usize,
+    /// Fall events over the run.
+    pub falls: u32,
+    /// The planner flagged the remaining route infeasible at some step.
+    pub infeasible: bool,
+    /// The time limit ended the run.
+    pub timed_out: bool,
+    /// Simulated time until the last instruction was done, or the run ended \[s\].
+    pub time_s: f64,
+    /// Mean head XY error against the plan, over every recorded step \[m\].
+    pub xy_err: f64,
+    /// Mean absolute head Z error \[m\].
+    pub z_err: f64,
+    /// Control steps with some body touching a wall or ceiling.
+    pub static_contact_steps: u32,
+    /// Times some body started touching a moving obstacle.
+    pub dynamic_collisions: u32,
+    /// Control steps on which the plan was re-planned.
+    pub replans: u32,
+    /// Planned route length at the start \[m\] (planner only).
+    pub planned_length: f64,
+    /// Planned route time at the start \[s\] (planner only).
+    pub planned_time: f64,
+    /// Head XY every [`TRACK_DT`] seconds.
+    pub track: Vec<[f64; 2]>,
+}
+
+impl Episode {
+    /// Every target reached without a fall.
+    pub fn success(&self) -> bool {
+        self.planning_error.is_none()
+            && self.run_error.is_none()
+            && self.reached == self.instructions
+            && self.falls == 0
+    }
+
+    /// Mean 3D head displacement: hypot of the mean XY and mean Z errors \[m\].
+    pub fn displacement(&self) -> f64 {
+        self.xy_err.hypot(self.z_err)
+    }
+
+    /// The track as `x:y;x:y;...` (centimetres), a CSV-safe field.
+    pub fn track_field(&self) -> String {
+        self.track
+            .iter()
+            .map(|p| format!("{:.2}:{:.2}", p[0], p[1]))
+            .collect::<Vec<_>>()
+            .join(";")
+    }
+}
+
+/// Parse [`Episode::track_field`] back.
+pub fn parse_track(s: &str) -> Vec<[f64; 2]> {
+    s.split(';')
+        .filter_map(|p| {
+            let (x, y) = p.split_once(':')?;
+            Some([x.parse().ok()?, y.parse().ok()?])
+        })
+        .collect()
+}
+
+/// The planner for `spec` at its start, or the planning error.
+pub fn plan(spec: &EpisodeSpec) -> Result<(RunSpec, Planner), String> {
+    let run = RunSpec {
+        scene: spec.scene.name.clone(),
+        instructions: vec![spec.instructions.clone()],
+        backend: spec.backend,
+        seed: spec.seed,
+    };
+    let p = run.placement(spec.scene, 0).map_err(|e| e.to_string())?;
+    let planner = Planner::new(
+        spec.scene.clone(),
+        &spec.instructions,
+        [p.x, p.y],
+        spec.planner.clone(),
+    )
+    .map_err(|e| e.to_string())?;
+    Ok((run, planner))
+}
+
+/// How far from a wall or ceiling a body in contact may be and still have its
+/// contact put down to it \[m\] (body positions are origins, not surfaces).
+pub const STATIC_ATTRIBUTION: f64 = 0.2;
+
+/// Whether body `b`, which physics reports in contact with something, touches a wall
+/// or a ceiling: near one and not a foot on the ground.
+fn touches_static(scene: &Scene, b: [f64; 3]) -> bool {
+    let r = STATIC_ATTRIBUTION;
+    if b[2] - scene.height_at(b[0], b[1]) < r {
+        return false;
+    }
+    scene
+        .walls
+        .iter()
+        .any(|w| w.footprint.signed_distance(b[0], b[1]) < r && b[2] < w.z_max + r)
+        || scene.tops.iter().any(|t| {
+            t.footprint.signed_distance(b[0], b[1]) < r && b[2] > t.z_bottom - r && b[2] < t.z_top
+        })
+}
+
+/// Whether a body at `b` touches moving obstacle `k` at time `t`.
+fn touches_dynamic(scene: &Scene, k: usize, t: f64, b: [f64; 3]) -> bool {
+    let o = &scene.dynamic[k];
+    let st = o.motion.state_at(t);
+    let d = [
+        b[0] - st.position[0],
+        b[1] - st.position[1],
+        b[2] - st.position[2],
+    ];
+    match o.shape {
+        ObstacleShape::Sphere { radius } => {
+            (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() < radius + BODY_RADIUS
+        }
+        ObstacleShape::Box { half_extents: h } => {
+            // Boxes yaw with their velocity (as in physics and the planner).
+            let v = st.velocity;
+            let yaw = if v[0].abs() + v[1].abs() > 1e-9 {
+                v[1].atan2(v[0])
+            } else {
+                0.0
+            };
+            let (s, c) = yaw.sin_cos();
+            let lx = c * d[0] + s * d[1];
+            let ly = -s * d[0] + c * d[1];
+            lx.abs() < h[0] + BODY_RADIUS
+                && ly.abs() < h[1] + BODY_RADIUS
+                && d[2].abs() < h[2] + BODY_RADIUS
+        }
+    }
+}
+
+/// Run `spec` to the end.
+pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
+    let mut ep = Episode::default();
+    let (run, planner) = match plan(spec) {
+        Ok(v) => v,
+        Err(e) => {
+            ep.planning_error = Some(e);
+            ep.instructions = plamo_planner::parse_instructions(&spec.instructions, spec.scene)
+                .map_or(1, |v| v.len());
+            return Ok(ep);
+        }
+    };
+    ep.instructions = planner.instructions().len();
+    ep.planned_length = planner.route().iter().map(|t| t.length()).sum();
+    ep.planned_time = planner.route().last().map_or(0.0, |t| t.end_time());
+    let max_seconds = spec
+        .max_seconds
+        .unwrap_or(TIME_LIMIT_FACTOR * ep.planned_time + TIME_LIMIT_EXTRA);
+    let scene = spec.scene;
+    let links = Links {
+        physics: Box::new(InProcess::new("physics", run.physics(scene)?)),
+        planners: vec![Box::new(InProcess::new(
+            "planner-0",
+            PlannerComponent::new(planner, 0),
+        ))],
+        controllers: vec![Box::new(InProcess::new(
+            "controller-0",
+            run.controller(scene, 0)?,
+        ))],
+    };
+    let mut ls = Lockstep::start(
+        links,
+        scene.clone(),
+        &[ep.instructions],
+        &ControllerSettings::default(),
+        max_seconds,
+    )?;
+    let mut touching = vec![false; scene.dynamic.len()];
+    let mut next_track = 0.0;
+    let status = loop {
+        let status = match ls.step() {
+            Ok(s) => s,
+            Err(e @ RunError::Component { .. }) => {
+                ep.run_error = Some(e.to_string());
+                break StepStatus::TimedOut;
+            }
+            Err(e) => return Err(e.into()),
+        };
+        if status != StepStatus::Running {
+            break status;
+        }
+        let t = ls.tick().seconds();
+        let plan = &ls.plans()[0];
+        ep.infeasible |= plan.flags & FLAG_INFEASIBLE != 0;
+        ep.replans += u32::from(plan.flags & FLAG_REPLANNED != 0);
+        let a = &ls.world().agents[0];
+        let bodies = &a.body_positions[..(a.body_count as usize).min(a.body_positions.len())];
+        if t >= next_track {
+            ep.track.push([a.head_position[0], a.head_position[1]]);
+            next_track += TRACK_DT;
+        }
+        let contact = |i: usize| i < 32 && a.body_contacts & (1 << i) != 0;
+        if bodies
+            .iter()
+            .enumerate()
+            .any(|(i, &b)| contact(i) && touches_static(scene, b))
+        {
+            ep.static_contact_steps += 1;
+        }
+        for (k, was) in touching.iter_mut().enumerate() {
+            let now = bodies.iter().any(|&b| touches_dynamic(scene, k, t, b));
+            ep.dynamic_collisions += u32::from(now && !*was);
+            *was = now;
+        }
+    };
+    ep.timed_out = status == StepStatus::TimedOut && ep.run_error.is_none();
+    let report = ls.report().swap_remove(0);
+    let mut steps = 0u64;
+    for r in &report {
+        ep.reached += usize::from(r.reached);
+        ep.falls += r.metrics.falls;
+        ep.time_s += r.time_s;
+        ep.xy_err += r.metrics.xy_err_mean * r.metrics.steps as f64;
+        ep.z_err += r.metrics.z_err_mean * r.metrics.steps as f64;
+        steps += r.metrics.steps;
+    }
+    if steps > 0 {
+        ep.xy_err /= steps as f64;
+        ep.z_err /= steps as f64;
+    }
+    Ok(ep)
+}

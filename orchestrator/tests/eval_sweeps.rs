@@ -1,0 +1,204 @@
+//! `plamo eval slalom | pyramid | random | dynamic | merge` on tiny sweeps (rapier,
+//! a couple of simulated seconds per run): results do not depend on the thread
+//! count, shards merge into the very same files as the whole sweep, every output
+//! file exists and parses, and bad arguments get clear errors.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use plamo::eval::dynamic::Dynamic;
+use plamo::eval::pyramid::Pyramid;
+use plamo::eval::random::RandomScenes;
+use plamo::eval::slalom::{QpConfig, Slalom};
+use plamo::eval::{self, Experiment, RunOptions, Shard, Table};
+use plamo_physics::BackendKind;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("plamo-eval-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn opts(out: &Path, threads: usize, shard: Shard) -> RunOptions {
+    RunOptions {
+        physics: BackendKind::Rapier,
+        out: out.to_path_buf(),
+        shard,
+        threads,
+        max_seconds: Some(1.0),
+        quiet: true,
+    }
+}
+
+fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+fn tiny_slalom() -> Slalom {
+    Slalom::new(
+        2,
+        7,
+        vec![1.0],
+        vec![QpConfig {
+            v_max: 2.0,
+            a_lat: 2.0,
+            a_max: 1.0,
+            a_min: -1.0,
+        }],
+    )
+    .unwrap()
+}
+
+/// Whole sweep on 1 and on 2 threads, and as 2 shards merged: identical folders.
+fn check_sweep<E: Experiment>(e: &E, expect: &[&str]) {
+    let one = tmp(&format!("{}-1", E::NAME));
+    let two = tmp(&format!("{}-2", E::NAME));
+    eval::run(e, &opts(&one, 1, Shard::ALL)).unwrap();
+    eval::run(e, &opts(&two, 2, Shard::ALL)).unwrap();
+    let a = files(&one);
+    assert_eq!(
+        a,
+        files(&two),
+        "{}: results depend on the thread count",
+        E::NAME
+    );
+    let names: Vec<&str> = a.iter().map(|(n, _)| n.as_str()).collect();
+    for f in expect {
+        assert!(names.contains(f), "{}: {f} missing from {names:?}", E::NAME);
+    }
+    // Everything parses: the run table has one row per job, the summary is a table.
+    let runs = Table::parse(
+        &String::from_utf8(std::fs::read(one.join("runs.csv")).unwrap()).unwrap(),
+        "runs",
+    )
+    .unwrap();
+    assert_eq!(runs.rows.len(), e.jobs().unwrap().len());
+    let summary = std::fs::read_to_string(one.join("summary.csv")).unwrap();
+    assert!(Table::parse(&summary, "summary").unwrap().rows.len() >= 2);
+    let meta: eval::Meta =
+        serde_json::from_str(&std::fs::read_to_string(one.join("eval.json")).unwrap()).unwrap();
+    assert_eq!(meta.experiment, E::NAME);
+    for (n, bytes) in &a {
+        if n.ends_with(".png") {
+            assert!(bytes.starts_with(b"\x89PNG") && bytes.len() > 5000, "{n}");
+        }
+    }
+
+    let s1 = tmp(&format!("{}-s1", E::NAME));
+    let s2 = tmp(&format!("{}-s2", E::NAME));
+    let merged = tmp(&format!("{}-m", E::NAME));
+    eval::run(e, &opts(&s2, 1, "2/2".parse().unwrap())).unwrap();
+    eval::run(e, &opts(&s1, 1, "1/2".parse().unwrap())).unwrap();
+    // A missing shard is refused by name.
+    let err = eval::merge(std::slice::from_ref(&s1), &merged).unwrap_err();
+    assert!(err.to_string().contains("shard 2/2 is missing"), "{err}");
+    eval::merge(&[s2.clone(), s1.clone()], &merged).unwrap();
+    assert_eq!(
+        a,
+        files(&merged),
+        "{}: merged shards differ from the whole sweep",
+        E::NAME
+    );
+    for d in [one, two, s1, s2, merged] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
+#[test]
+fn slalom_is_deterministic_and_merges() {
+    check_sweep(
+        &tiny_slalom(),
+        &[
+            "eval.json",
+            "runs.csv",
+            "summary.csv",
+            "slalom.md",
+            "slalom_failure.png",
+            "slalom_error.png",
+        ],
+    );
+}
+
+#[test]
+fn pyramid_random_dynamic_are_deterministic_and_merge() {
+    check_sweep(
+        &Pyramid::new(1, 0, vec![0.0, 4.0]).unwrap(),
+        &["pyramid.md", "pyramid.png", "summary.csv"],
+    );
+    check_sweep(
+        &RandomScenes::new(3, 11).unwrap(),
+        &["random.md", "random.png", "summary.csv"],
+    );
+    check_sweep(
+        &Dynamic::new(1, 3).unwrap(),
+        &[
+            "dynamic.md",
+            "dynamic.png",
+            "dynamic_map.png",
+            "summary.csv",
+        ],
+    );
+}
+
+#[test]
+fn merge_refuses_shards_of_different_sweeps() {
+    let a = tmp("diff-a");
+    let b = tmp("diff-b");
+    eval::run(&tiny_slalom(), &opts(&a, 1, "1/2".parse().unwrap())).unwrap();
+    let other = Slalom::new(1, 7, vec![1.0], vec![]).unwrap();
+    eval::run(&other, &opts(&b, 1, "2/2".parse().unwrap())).unwrap();
+    let err = eval::merge(&[a.clone(), b.clone()], &tmp("diff-m")).unwrap_err();
+    assert!(err.to_string().contains("different sweep"), "{err}");
+    let _ = std::fs::remove_dir_all(a);
+    let _ = std::fs::remove_dir_all(b);
+}
+
+fn plamo(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_plamo"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn bad_arguments_are_refused_by_name() {
+    let cases: [(&[&str], &str); 7] = [
+        (&["eval", "slalom", "--shard", "3/2"], "1 <= i <= n"),
+        (&["eval", "slalom", "--qp", "1:2"], "V_MAX:A_LAT:A_MAX"),
+        (&["eval", "slalom", "--qp", "2:1:1:0.5"], "A_MIN"),
+        (&["eval", "slalom", "--runs", "0"], "--runs 0"),
+        (&["eval", "random", "--scenes", "0"], "--scenes 0"),
+        (&["eval", "pyramid", "--c=-1"], "terrain preference"),
+        (&["eval", "dynamic", "--physics", "bullet"], "bullet"),
+    ];
+    for (args, needle) in cases {
+        let (ok, err) = plamo(args);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(err.contains(needle), "{args:?}: `{needle}` not in {err}");
+    }
+    let (ok, err) = plamo(&["eval", "merge", "--out", "/tmp/x", "/nonexistent-shard"]);
+    assert!(!ok && err.contains("eval.json"), "{err}");
+    let (ok, err) = plamo(&[
+        "eval",
+        "slalom",
+        "--max-seconds=-1",
+        "--out",
+        "/tmp/plamo-eval-x",
+    ]);
+    assert!(!ok && err.contains("--max-seconds"), "{err}");
+}
