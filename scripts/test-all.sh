@@ -32,7 +32,8 @@ python3 fmus/tests/fmpy_host.py target/fmu-test
 
 # ---- Replay exports and viewer (issue 9) ----------------------------------------
 # The real tools check the exports of the playground route on both backends: the
-# Khronos glTF validator (npm), an independent BVH reader (PyPI `bvh`), and Debian's
+# Khronos glTF validator (npm), an independent BVH reader (PyPI `bvh`), the MCAP
+# project's reader (PyPI `mcap`), and Debian's
 # headless Chromium (never a downloaded browser build) driving the viewer page
 # through playwright-core.
 echo "== replay exports and viewer: glTF validator, BVH reader, headless Chromium"
@@ -46,7 +47,7 @@ if [ -n "$viewer_apt" ]; then
     # shellcheck disable=SC2086  # a list of package names
     $sudo_ apt-get install -y -qq --no-install-recommends $viewer_apt >/dev/null
 fi
-python3 -m pip install --quiet --disable-pip-version-check "bvh==0.3"
+python3 -m pip install --quiet --disable-pip-version-check "bvh==0.3" "mcap==1.6.0"
 PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --prefix orchestrator/viewer --no-audit --no-fund --loglevel=error
 npm run --silent build --prefix orchestrator/viewer
 viewer_out=target/viewer-test
@@ -64,6 +65,7 @@ for physics in rapier mujoco; do
 done
 node orchestrator/viewer/test/validate-gltf.mjs "$viewer_out"/*/replay.glb
 python3 orchestrator/tests/viewer/check_bvh.py "$viewer_out/rapier" "$viewer_out/mujoco"
+python3 orchestrator/tests/viewer/check_mcap.py "$viewer_out/rapier" "$viewer_out/mujoco"
 cargo run --quiet --locked --all-features -- view "$viewer_out/rapier" "$viewer_out/mujoco" \
     --write-html "$viewer_out/view.html"
 node orchestrator/viewer/test/browser.mjs "$viewer_out/view.html" "$viewer_out/screenshots"

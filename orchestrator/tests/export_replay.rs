@@ -200,7 +200,13 @@ fn check_backend(physics: &str, tolerance: f64) {
     record(physics, &a);
     record(physics, &b);
     check_animation(&a, tolerance);
-    for f in ["replay.glb", "motion.bvh", "trajectory.csv", "scene.json"] {
+    for f in [
+        "replay.glb",
+        "motion.bvh",
+        "replay.mcap",
+        "trajectory.csv",
+        "scene.json",
+    ] {
         assert!(
             std::fs::read(a.join(f)).unwrap() == std::fs::read(b.join(f)).unwrap(),
             "{f} differs between two identical runs"
@@ -209,11 +215,14 @@ fn check_backend(physics: &str, tolerance: f64) {
     // Re-exporting the recording writes the same bytes the run wrote.
     let glb = std::fs::read(a.join("replay.glb")).unwrap();
     let bvh = std::fs::read(a.join("motion.bvh")).unwrap();
+    let mcap = std::fs::read(a.join("replay.mcap")).unwrap();
     std::fs::remove_file(a.join("replay.glb")).unwrap();
     let o = run_plamo(&["export", a.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(std::fs::read(a.join("replay.glb")).unwrap() == glb);
     assert!(std::fs::read(a.join("motion.bvh")).unwrap() == bvh);
+    assert!(std::fs::read(a.join("replay.mcap")).unwrap() == mcap);
+    assert!(mcap.starts_with(b"\x89MCAP0\r\n") && mcap.ends_with(b"\x89MCAP0\r\n"));
     let text = String::from_utf8(bvh).unwrap();
     assert!(text.starts_with("HIERARCHY\nROOT pelvis\n"));
     let frames: usize = text

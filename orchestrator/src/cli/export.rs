@@ -1,6 +1,6 @@
-//! `plamo export DIR`: write `replay.glb` and `motion.bvh` for a recorded run (what
-//! `plamo run --out DIR` writes itself), e.g. for recordings made before the
-//! exporters existed.
+//! `plamo export DIR`: write `replay.glb`, `motion.bvh` and `replay.mcap` for a
+//! recorded run (what `plamo run --out DIR` writes itself), e.g. for recordings made
+//! before the exporters existed.
 
 use std::path::PathBuf;
 use std::process::ExitCode;

@@ -42,7 +42,7 @@ enum Command {
     /// Build the FMI 2.0 co-simulation FMUs.
     #[command(subcommand)]
     Fmu(fmu::FmuCommand),
-    /// Write replay.glb (glTF 2.0) and motion.bvh for a recorded run.
+    /// Write replay.glb (glTF 2.0), motion.bvh and replay.mcap for a recorded run.
     Export(export::ExportArgs),
     /// Write (and open) the HTML replay viewer for recorded runs.
     View(view::ViewArgs),

@@ -350,7 +350,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         plamo::record::write_scene(dir, &scene)?;
         plamo::export::export_dir(dir)?;
         println!(
-            "wrote {} (replay.glb, motion.bvh; watch it: plamo view {0})",
+            "wrote {} (replay.glb, motion.bvh, replay.mcap; watch it: plamo view {0})",
             dir.display()
         );
     }

@@ -1,7 +1,8 @@
 //! Exports of a recorded run (`plamo run --out DIR`) for the tools people watch motion
 //! in: `replay.glb` (glTF 2.0 binary: scene, humanoid meshes on a node hierarchy and
-//! the animation), `motion.bvh` (skeleton and joint rotations for animation tools) and
-//! the self-contained HTML replay viewer of `plamo view`.
+//! the animation), `motion.bvh` (skeleton and joint rotations for animation tools),
+//! `replay.mcap` (transforms and states for robotics log viewers) and the
+//! self-contained HTML replay viewer of `plamo view`.
 //!
 //! Everything is computed from the files of the recording, never from a live run, so
 //! `plamo export DIR` on an old recording writes the same bytes `plamo run --out DIR`
@@ -11,6 +12,7 @@
 mod bvh;
 mod fk;
 mod gltf;
+mod mcap;
 mod mesh;
 mod recording;
 mod viewer;
@@ -18,6 +20,7 @@ mod viewer;
 pub use bvh::write_bvh;
 pub use fk::{BodyPose, body_poses, local_rotations};
 pub use gltf::write_glb;
+pub use mcap::write_mcap;
 pub use recording::{AgentFrame, AgentTrack, ObstacleFrame, PlannedPoint, Recording};
 pub use viewer::{
     BUILD_COMMAND, BUNDLE_PATH, ViewerBundle, viewer_data, viewer_html, write_viewer,
@@ -74,16 +77,20 @@ pub enum ExportError {
 pub const GLB_FILE: &str = "replay.glb";
 /// BVH file name.
 pub const BVH_FILE: &str = "motion.bvh";
+/// MCAP file name.
+pub const MCAP_FILE: &str = "replay.mcap";
 
-/// Write `replay.glb` and `motion.bvh` (agent 0's motion) into the recording
-/// directory; returns the paths written.
+/// Write `replay.glb`, `motion.bvh` (agent 0's motion) and `replay.mcap` into the
+/// recording directory; returns the paths written.
 pub fn export_dir(dir: &Path) -> Result<Vec<PathBuf>, ExportError> {
     let rec = Recording::load(dir)?;
     let glb = dir.join(GLB_FILE);
     write_file(&glb, &write_glb(&rec))?;
     let bvh = dir.join(BVH_FILE);
     write_file(&bvh, write_bvh(&rec, 0).as_bytes())?;
-    Ok(vec![glb, bvh])
+    let mcap = dir.join(MCAP_FILE);
+    write_file(&mcap, &write_mcap(&rec))?;
+    Ok(vec![glb, bvh, mcap])
 }
 
 fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ExportError> {
