@@ -29,6 +29,18 @@ python3 -m pip install --quiet --disable-pip-version-check "fmpy==0.3.32"
 cargo build --quiet --locked -p plamo-fmu
 cargo run --quiet --locked --all-features -- fmu build --out target/fmu-test
 python3 fmus/tests/fmpy_host.py target/fmu-test
+# The FMU's 1000 instantiate/free cycles (and full initialise/step cycles) once more
+# under valgrind (Debian's), next to the counting-allocator check of the test itself.
+if ! command -v valgrind >/dev/null; then
+    sudo_=""
+    [ "$(id -u)" -eq 0 ] || sudo_="sudo"
+    $sudo_ apt-get update -qq
+    $sudo_ apt-get install -y -qq --no-install-recommends valgrind >/dev/null
+fi
+leaks_bin=$(cargo test --locked -p plamo-fmu --test leaks --no-run 2>&1 |
+    sed -n 's/.*Executable tests\/leaks.rs (\(.*\))$/\1/p')
+valgrind --quiet --leak-check=full --errors-for-leak-kinds=definite,indirect --error-exitcode=9 \
+    "$leaks_bin" --test-threads=1
 
 # ---- Replay exports and viewer (issue 9) ----------------------------------------
 # The real tools check the exports of the playground route on both backends: the

@@ -9,7 +9,11 @@
 //! implements.
 #![warn(missing_docs)]
 
-mod ffi;
+/// The FMI 2.0 C entry points (public so a test binary can call them in-process
+/// under a counting allocator; hosts reach them as C symbols).
+#[doc(hidden)]
+#[allow(missing_docs)]
+pub mod ffi;
 pub mod humanoid_model;
 pub mod instance;
 pub mod models;

@@ -3,11 +3,15 @@
 Usage: python3 fmus/tests/fmpy_host.py DIR   (DIR holds the .fmu files of `plamo fmu build`)
 Prints one line per check and a closing 'N passed, M failed' line; exits 1 on failure.
 """
+import csv
 import math
+import os
 import shutil
+import subprocess
 import sys
 import tempfile
 import traceback
+import zipfile
 
 import numpy as np
 from fmpy import extract, read_model_description, simulate_fmu
@@ -18,6 +22,7 @@ from fmpy.validation import validate_fmu
 
 FMU_DIR = sys.argv[1]
 PLANNER = f"{FMU_DIR}/plamo-planner.fmu"
+HUMANOID = f"{FMU_DIR}/plamo.fmu"
 LOGS = []
 
 
@@ -57,6 +62,138 @@ def expect_error(what, call, needle):
 def check_validate():
     problems = validate_fmu(PLANNER)
     assert problems == [], problems
+
+
+def check_humanoid_validate():
+    problems = validate_fmu(HUMANOID)
+    assert problems == [], problems
+
+
+SANDBOX = (4.0, 4.0, 1.5)  # playground landmark: centre x, y and half side [m]
+
+
+def check_humanoid_simulate_with_a_ball_rolling_across_its_route():
+    """`fmpy simulate` with an input CSV: a ball rolls across the default route
+    (fountain (4, 14) to sandbox (4, 4)) at y = 9; the humanoid must still arrive."""
+    tmp = tempfile.mkdtemp()
+    try:
+        inputs, result = f"{tmp}/ball.csv", f"{tmp}/result.csv"
+        with open(inputs, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["time", "obstacle[1].active", "obstacle[1].x", "obstacle[1].y", "obstacle[1].z",
+                        "obstacle[1].vx", "obstacle[1].vy", "obstacle[1].vz"])
+            for t in range(0, 21):
+                w.writerow([float(t), 1.0, -1.0 + t, 9.0, 0.3, 1.0, 0.0, 0.0])
+        outputs = ["head.x", "head.y", "head.z", "speed", "instruction", "progress", "done", "fallen",
+                   "xy_error"]
+        cmd = [sys.executable, "-m", "fmpy", "simulate", HUMANOID, "--stop-time", "20",
+               "--output-interval", "0.1", "--input-file", inputs, "--output-file", result,
+               "--start-values", "seed", "2", "--output-variables", *outputs]
+        run = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+        assert run.returncode == 0, f"fmpy simulate failed: {run.stdout} {run.stderr}"
+        with open(result) as f:
+            rows = list(csv.DictReader(f))
+        assert len(rows) >= 200, f"{len(rows)} rows: the simulation stopped early"
+        assert abs(float(rows[-1]["time"]) - 20.0) < 1e-6, rows[-1]["time"]
+        for r in rows:
+            assert all(math.isfinite(float(r[k])) for k in ["head.x", "head.y", "head.z", "xy_error"]), r
+        done = [r for r in rows if r["done"] in ("1", "True", "true", "1.0")]
+        assert done, f"never done; last row {rows[-1]}"
+        cx, cy, half = SANDBOX
+        x, y = float(done[0]["head.x"]), float(done[0]["head.y"])
+        assert abs(x - cx) <= half and abs(y - cy) <= half, \
+            f"done at t = {done[0]['time']} s with the head at ({x:.2f}, {y:.2f}), outside the sandbox"
+        print(f"       done at t = {float(done[0]['time']):.1f} s, head at ({x:.2f}, {y:.2f}); "
+              f"max XY error {max(float(r['xy_error']) for r in rows):.2f} m")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def with_resource(fmu, name, source):
+    """A copy of `fmu` that ships `source` as resources/`name`."""
+    out = f"{tempfile.mkdtemp()}/{os.path.basename(fmu)}"
+    shutil.copy(fmu, out)
+    with zipfile.ZipFile(out, "a") as z:
+        z.write(source, f"resources/{name}")
+    return out
+
+
+def check_humanoid_string_parameters_and_a_scene_from_resources():
+    playground = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scenes", "playground.toml")
+    fmu = with_resource(HUMANOID, "my-park.toml", playground)
+    slave, vr, unzipdir = open_slave(fmu)
+    try:
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.setString([vr["scene"], vr["instructions"], vr["physics"]],
+                        ["my-park.toml", "walk from the tree to the fountain", "rapier"])
+        slave.exitInitializationMode()
+        assert slave.getInteger([vr["instruction_count"]])[0] == 1
+        start = slave.getReal([vr["head.x"], vr["head.y"]])
+        assert abs(start[0] - 3.5) < 0.5 and abs(start[1] - 26.0) < 0.5, start
+        t, dt = 0.0, 0.009999999999999998
+        while t < 1.0 - 1e-9:
+            slave.doStep(currentCommunicationPoint=t, communicationStepSize=dt)
+            t += dt
+        head = slave.getReal([vr["head.x"], vr["head.y"], vr["head.z"]])
+        assert head[2] > 1.2, f"head at {head} after 1 s"
+        expect_error("parameter after initialisation",
+                     lambda: slave.setString([vr["scene"]], ["slalom"]), "parameters are fixed")
+        slave.terminate()
+    finally:
+        slave.freeInstance()
+        shutil.rmtree(unzipdir, ignore_errors=True)
+        shutil.rmtree(os.path.dirname(fmu), ignore_errors=True)
+
+
+def check_humanoid_misuse_is_refused_with_a_message():
+    slave, vr, unzipdir = open_slave(HUMANOID)
+    try:
+        expect_error("doStep before initialisation", lambda: slave.doStep(0.0, 0.1), "fmi2DoStep is not allowed")
+        expect_error("unknown value reference", lambda: slave.getReal([99999]), "unknown value reference 99999")
+        expect_error("NaN input", lambda: slave.setReal([vr["obstacle[1].x"]], [math.nan]), "finite numbers only")
+        expect_error("infinite input", lambda: slave.setReal([vr["obstacle[3].vy"]], [math.inf]),
+                     "finite numbers only")
+        expect_error("setting an output", lambda: slave.setReal([vr["head.x"]], [1.0]), "outputs are computed")
+        expect_error("wrong type", lambda: slave.getInteger([vr["head.x"]]), "is Real, not Integer")
+    finally:
+        slave.freeInstance()
+        shutil.rmtree(unzipdir, ignore_errors=True)
+    for what, name, value, needle in [
+        ("bad scene", "scene", "playgrund", "playground"),
+        ("bad physics", "physics", "bullet", "allowed in this build: rapier"),
+        ("unknown landmark", "instructions", "walk from the moon to the car", "moon"),
+    ]:
+        slave, vr, unzipdir = open_slave(HUMANOID)
+        try:
+            slave.setupExperiment(startTime=0.0)
+            slave.enterInitializationMode()
+            slave.setString([vr[name]], [value])
+            expect_error(what, slave.exitInitializationMode, needle)
+            # The instance is in the error state now: stepping is refused, not crashed.
+            expect_error(f"{what}: doStep after the error", lambda: slave.doStep(0.0, 0.1), "not allowed")
+        finally:
+            slave.freeInstance()
+            shutil.rmtree(unzipdir, ignore_errors=True)
+    slave, vr, unzipdir = open_slave(HUMANOID)
+    try:
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.setInteger([vr["seed"]], [-1])
+        expect_error("negative seed", slave.exitInitializationMode, "must be >= 0")
+    finally:
+        slave.freeInstance()
+        shutil.rmtree(unzipdir, ignore_errors=True)
+    slave, vr, unzipdir = open_slave(HUMANOID)
+    try:
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.exitInitializationMode()
+        slave.doStep(0.0, 0.05)
+        expect_error("a step that does not continue", lambda: slave.doStep(0.2, 0.05), "contiguous")
+    finally:
+        slave.freeInstance()
+        shutil.rmtree(unzipdir, ignore_errors=True)
 
 
 def check_closed_loop_with_string_parameters():
@@ -134,7 +271,10 @@ def check_simulate_with_input_file():
 
 
 CHECKS = [check_validate, check_closed_loop_with_string_parameters, check_misuse_is_refused_with_a_message,
-          check_unknown_landmark, check_simulate_with_input_file]
+          check_unknown_landmark, check_simulate_with_input_file, check_humanoid_validate,
+          check_humanoid_simulate_with_a_ball_rolling_across_its_route,
+          check_humanoid_string_parameters_and_a_scene_from_resources,
+          check_humanoid_misuse_is_refused_with_a_message]
 
 passed = failed = 0
 for check in CHECKS:

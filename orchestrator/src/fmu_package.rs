@@ -74,6 +74,52 @@ pub fn model_descriptions(library: &Path) -> Result<Vec<String>> {
     }
 }
 
+/// Shared libraries the FMU library links that a host machine lacks, to ship next to
+/// it in `binaries/linux64/` (its rpath includes `$ORIGIN`): libmujoco when it was
+/// built with the MuJoCo backend. Found by their soname in the library's dynamic
+/// string table, in `third_party/mujoco/lib` where the build's rpath looks.
+pub fn bundled_libraries(library: &Path, binary: &[u8]) -> Result<Vec<PathBuf>> {
+    const PREFIX: &[u8] = b"libmujoco.so.";
+    let mut sonames: Vec<String> = Vec::new();
+    let mut from = 0;
+    while let Some(i) = binary[from..]
+        .windows(PREFIX.len())
+        .position(|w| w == PREFIX)
+        .map(|i| from + i)
+    {
+        from = i + PREFIX.len();
+        // A soname entry: the prefix, a version of digits and dots, then NUL.
+        let version: Vec<u8> = binary[from..]
+            .iter()
+            .copied()
+            .take_while(|b| b.is_ascii_digit() || *b == b'.')
+            .collect();
+        let preceded_by_nul = i == 0 || binary[i - 1] == 0;
+        if !version.is_empty() && preceded_by_nul && binary.get(from + version.len()) == Some(&0) {
+            let name = format!("libmujoco.so.{}", String::from_utf8_lossy(&version));
+            if !sonames.contains(&name) {
+                sonames.push(name);
+            }
+        }
+    }
+    let dir = library.parent().unwrap_or(Path::new("."));
+    sonames
+        .iter()
+        .map(|name| {
+            ["../third_party/mujoco/lib", "../../third_party/mujoco/lib", "../../../third_party/mujoco/lib"]
+                .iter()
+                .map(|up| dir.join(up).join(name))
+                .find(|p| p.is_file())
+                .ok_or_else(|| {
+                    anyhow!(
+                        "{} was built with the MuJoCo backend and needs {name}, which is not in third_party/mujoco/lib: run scripts/install-mujoco.sh",
+                        library.display()
+                    )
+                })
+        })
+        .collect()
+}
+
 fn attribute(xml: &str, name: &str) -> Result<String> {
     let key = format!(" {name}=\"");
     let start = xml
@@ -99,6 +145,7 @@ pub fn package_all(
     }
     let binary =
         std::fs::read(library).with_context(|| format!("reading {}", library.display()))?;
+    let bundled = bundled_libraries(library, &binary)?;
     std::fs::create_dir_all(out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let mut written = Vec::new();
     for xml in descriptions {
@@ -114,6 +161,11 @@ pub fn package_all(
         zip.write_all(xml.as_bytes())?;
         zip.start_file(format!("binaries/linux64/{identifier}.so"), opts)?;
         zip.write_all(&binary)?;
+        for b in &bundled {
+            let name = b.file_name().unwrap_or_default().to_string_lossy();
+            zip.start_file(format!("binaries/linux64/{name}"), opts)?;
+            zip.write_all(&std::fs::read(b).with_context(|| format!("reading {}", b.display()))?)?;
+        }
         for r in resources {
             let name = r
                 .file_name()
