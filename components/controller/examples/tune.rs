@@ -2,7 +2,7 @@
 //! `plamo tune`, without the orchestrator); prints progress and writes the file.
 //!
 //! `cargo run --release -p plamo-controller --features mujoco --example tune --
-//! [walk|run|crouch] [generations] [seed] [mujoco|rapier] [out.toml]`
+//! [walk|run|crouch] [generations] [seed] [mujoco|rapier|rapier,mujoco] [out.toml]`
 
 use std::error::Error;
 
@@ -16,7 +16,10 @@ fn main() -> Result<(), Box<dyn Error>> {
         form,
         generations: arg(1, "30").parse()?,
         seed: arg(2, "1").parse()?,
-        backends: vec![arg(3, "mujoco").parse()?],
+        backends: arg(3, "mujoco")
+            .split(',')
+            .map(str::parse)
+            .collect::<Result<Vec<_>, _>>()?,
         rollouts: 4,
         duration: 8.0,
         sigma0: 0.15,

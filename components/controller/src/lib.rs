@@ -35,7 +35,7 @@ pub use observation::{
 };
 pub use onnx_policy::{OnnxPolicy, PolicySidecar};
 pub use policy::{Action, Policy, RootWrench};
-pub use rollout::{StraightPath, flat_scene, run_straight};
+pub use rollout::{ArcPath, HeadPath, StraightPath, flat_scene, run_path, run_straight};
 pub use settings::{ControllerSettings, GRAVITY};
 pub use tune::{
     Cost, Form, Generation, Rng, Sample, SepCmaEs, TuneSettings, evaluate, to_toml, tune,

@@ -1,7 +1,7 @@
 //! Closed-loop rollouts: physics + observation + policy + metrics at 30/120 Hz, for
 //! tests, examples and parameter tuning. The orchestrator runs the real lockstep; this
 //! is the controller's own test bench on a straight constant-speed path (paper
-//! Table 2's protocol).
+//! Table 2's protocol) and on an arc (heading control).
 
 use plamo_interfaces::PHYSICS_STEPS_PER_CONTROL;
 use plamo_physics::{
@@ -58,6 +58,83 @@ impl StraightPath {
     }
 }
 
+/// A head path the rollout follows: the plan's point at time `t` and the path's
+/// direction there.
+pub trait HeadPath {
+    /// The plan's head point at time `t` \[s\] on `scene`.
+    fn point(&self, scene: &Scene, t: f64) -> Waypoint;
+    /// Unit direction of travel (x, y) at time `t`.
+    fn direction(&self, t: f64) -> [f64; 2];
+    /// Requested head height above the terrain \[m\].
+    fn head_height(&self) -> f64;
+}
+
+impl HeadPath for StraightPath {
+    fn point(&self, scene: &Scene, t: f64) -> Waypoint {
+        self.at(scene, t)
+    }
+    fn direction(&self, _t: f64) -> [f64; 2] {
+        [1.0, 0.0]
+    }
+    fn head_height(&self) -> f64 {
+        self.head_height
+    }
+}
+
+/// A path along +X for `straight` metres, then a circular arc of `radius` (positive
+/// turns left), at constant speed and head height.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArcPath {
+    /// Start of the head path (x, y) \[m\].
+    pub start: [f64; 2],
+    /// Speed \[m/s\].
+    pub speed: f64,
+    /// Head height above the terrain \[m\].
+    pub head_height: f64,
+    /// Straight run before the turn \[m\].
+    pub straight: f64,
+    /// Turn radius, positive to the left \[m\].
+    pub radius: f64,
+}
+
+impl ArcPath {
+    /// Position (x, y) and heading \[rad\] after `s` metres.
+    fn pose(&self, s: f64) -> ([f64; 2], f64) {
+        let s = s.max(0.0);
+        if s <= self.straight || self.radius == 0.0 {
+            return ([self.start[0] + s, self.start[1]], 0.0);
+        }
+        let a = (s - self.straight) / self.radius;
+        let (sin, cos) = a.sin_cos();
+        (
+            [
+                self.start[0] + self.straight + self.radius * sin,
+                self.start[1] + self.radius * (1.0 - cos),
+            ],
+            a,
+        )
+    }
+}
+
+impl HeadPath for ArcPath {
+    fn point(&self, scene: &Scene, t: f64) -> Waypoint {
+        let ([x, y], _) = self.pose(self.speed * t);
+        Waypoint {
+            x,
+            y,
+            z: scene.height_at(x, y) + self.head_height,
+            v: self.speed,
+        }
+    }
+    fn direction(&self, t: f64) -> [f64; 2] {
+        let (_, h) = self.pose(self.speed * t);
+        [h.cos(), h.sin()]
+    }
+    fn head_height(&self) -> f64 {
+        self.head_height
+    }
+}
+
 /// A flat scene long enough for a straight rollout of `length` metres along +X.
 pub fn flat_scene(length: f64) -> Scene {
     Scene {
@@ -82,8 +159,20 @@ pub fn run_straight(
     policy: &mut dyn Policy,
     settings: &ControllerSettings,
 ) -> Result<MetricsSummary> {
+    run_path(backend, scene, &path, duration, policy, settings)
+}
+
+/// Runs `policy` along any [`HeadPath`] (see [`run_straight`]).
+pub fn run_path(
+    backend: BackendKind,
+    scene: &Scene,
+    path: &dyn HeadPath,
+    duration: f64,
+    policy: &mut dyn Policy,
+    settings: &ControllerSettings,
+) -> Result<MetricsSummary> {
     let mut physics = create_backend(backend, scene, &PhysicsSettings::default())?;
-    let start = path.at(scene, 0.0);
+    let start = path.point(scene, 0.0);
     physics.reset(&HumanoidPose::standing_on(
         &scene.terrain,
         start.x,
@@ -101,8 +190,9 @@ pub fn run_straight(
         let t = c as f64 / plamo_interfaces::CONTROL_HZ as f64;
         let state = physics.state().clone();
         let ground = scene.height_at(state.head[0], state.head[1]);
-        let fallen = settings.is_fallen(state.head[2] - ground, path.head_height);
-        let target = path.at(scene, t);
+        let fallen = settings.is_fallen(state.head[2] - ground, path.head_height());
+        let target = path.point(scene, t);
+        let dir = path.direction(t);
         let max_other = state
             .body_pos
             .iter()
@@ -116,7 +206,7 @@ pub fn run_straight(
             head: state.head,
             target: [target.x, target.y, target.z],
             head_dir: [heading.cos(), heading.sin(), 0.0],
-            path_dir: [path.speed, 0.0, 0.0],
+            path_dir: [dir[0], dir[1], 0.0],
             max_other_body_z: max_other,
             fallen,
             residual: action.root_wrench,
@@ -126,13 +216,13 @@ pub fn run_straight(
                 &scene.terrain,
                 target.x,
                 target.y,
-                0.0,
+                dir[1].atan2(dir[0]),
             ))?;
             policy.reset();
             continue;
         }
         for (i, w) in plan.iter_mut().enumerate() {
-            *w = path.at(scene, t + WAYPOINT_SPACING * (i + 1) as f64);
+            *w = path.point(scene, t + WAYPOINT_SPACING * (i + 1) as f64);
         }
         obs.update(&HumanoidSnapshot::from(&state), &plan, scene)?;
         policy.act(&obs, &mut action)?;

@@ -61,24 +61,38 @@ impl Form {
     }
 }
 
-/// Tuned fields with their search box (units of the field, see [`FormParams`]).
-const TUNED: [(&str, f64, f64); 13] = [
+/// Tuned fields with their search box (units of the field, see [`FormParams`] and,
+/// for `residual.*`, [`crate::ResidualGains`], which all forms share).
+const TUNED: [(&str, f64, f64); 17] = [
     ("step_time", 0.25, 0.55),
     ("swing_height", 0.04, 0.16),
     ("pelvis_height", 0.80, 0.93),
-    ("trunk_pitch", -0.05, 0.25),
-    ("lean_per_speed", 0.0, 0.10),
-    ("foot_fwd_gain", 0.15, 0.40),
+    ("trunk_pitch", -0.15, 0.30),
+    ("lean_per_speed", 0.0, 0.15),
+    ("foot_fwd_gain", 0.05, 0.40),
     ("foot_err_gain", 0.0, 0.25),
     ("foot_width", 0.05, 0.14),
-    ("foot_lat_gain", 0.1, 0.45),
+    ("foot_lat_gain", 0.0, 0.45),
     ("torso_kp", 200.0, 1500.0),
     ("torso_kd", 10.0, 150.0),
     ("stance_push", 0.0, 0.2),
     ("swing_comp", 0.0, 1.0),
+    ("speed_ki", 0.0, 0.5),
+    // The residual should only catch what the gait cannot do: its gains are tuned
+    // with the gait, so the cost's residual term can push them down.
+    ("residual.vel_gain", 0.0, 4.0),
+    ("residual.height_gain", 0.0, 60.0),
+    ("residual.height_damping", 0.0, 10.0),
 ];
 
-fn field<'a>(f: &'a mut FormParams, name: &str) -> &'a mut f64 {
+fn field<'a>(p: &'a mut GaitParams, form: Form, name: &str) -> &'a mut f64 {
+    match name {
+        "residual.vel_gain" => return &mut p.residual.vel_gain,
+        "residual.height_gain" => return &mut p.residual.height_gain,
+        "residual.height_damping" => return &mut p.residual.height_damping,
+        _ => {}
+    }
+    let f = form.params(p);
     match name {
         "step_time" => &mut f.step_time,
         "swing_height" => &mut f.swing_height,
@@ -92,6 +106,7 @@ fn field<'a>(f: &'a mut FormParams, name: &str) -> &'a mut f64 {
         "torso_kp" => &mut f.torso_kp,
         "torso_kd" => &mut f.torso_kd,
         "stance_push" => &mut f.stance_push,
+        "speed_ki" => &mut f.speed_ki,
         _ => &mut f.swing_comp,
     }
 }
@@ -117,8 +132,12 @@ pub struct TuneSettings {
     pub controller: ControllerSettings,
 }
 
+/// Cost of a fall \[m-equivalent\]: more than the XY error a reset onto the plan saves.
+const FALL_COST: f64 = 1.0;
+
 /// Cost of one parameter set: mean over rollouts of
-/// `xy_err + z_err + residual_force_mean + 0.5 * falls` (metres, fraction of m*g, count).
+/// `xy_err + z_err + residual_force_mean + FALL_COST * falls` (metres, fraction of m*g,
+/// count).
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct Cost {
     /// Total cost \[-\].
@@ -178,7 +197,7 @@ pub fn evaluate(params: &GaitParams, s: &TuneSettings, seed: u64) -> Result<Cost
             )?;
             let falls = f64::from(m.falls);
             Ok(Cost {
-                total: m.xy_err_mean + m.z_err_mean + m.residual_force_mean + 0.5 * falls,
+                total: m.xy_err_mean + m.z_err_mean + m.residual_force_mean + FALL_COST * falls,
                 falls,
                 xy: m.xy_err_mean,
                 z: m.z_err_mean,
@@ -210,19 +229,17 @@ pub fn evaluate(params: &GaitParams, s: &TuneSettings, seed: u64) -> Result<Cost
 
 fn decode(base: &GaitParams, form: Form, x: &[f64]) -> GaitParams {
     let mut p = *base;
-    let f = form.params(&mut p);
     for (&(name, lo, hi), v) in TUNED.iter().zip(x) {
-        *field(f, name) = lo + (hi - lo) * v.clamp(0.0, 1.0);
+        *field(&mut p, form, name) = lo + (hi - lo) * v.clamp(0.0, 1.0);
     }
     p
 }
 
 fn encode(base: &GaitParams, form: Form) -> Vec<f64> {
     let mut p = *base;
-    let f = form.params(&mut p);
     TUNED
         .iter()
-        .map(|&(name, lo, hi)| ((*field(f, name) - lo) / (hi - lo)).clamp(0.0, 1.0))
+        .map(|&(name, lo, hi)| ((*field(&mut p, form, name) - lo) / (hi - lo)).clamp(0.0, 1.0))
         .collect()
 }
 

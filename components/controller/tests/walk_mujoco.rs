@@ -1,9 +1,10 @@
 //! Closed loop in MuJoCo: the default model-based controller walks a straight path at
-//! 1.0 and 1.5 m/s on flat ground without falling and tracks the head path.
+//! 1.0 and 1.5 m/s and an arc on flat ground without falling and tracks the head path.
 #![cfg(feature = "mujoco")]
 
 use plamo_controller::{
-    ControllerSettings, ModelBasedController, StraightPath, flat_scene, run_straight,
+    ArcPath, ControllerSettings, ModelBasedController, StraightPath, flat_scene, run_path,
+    run_straight,
 };
 use plamo_physics::BackendKind;
 
@@ -41,10 +42,46 @@ fn walk(speed: f64) {
     // Paper Table 2, walk on flat: XY 0.24 m, Z 0.21 m.
     assert!(m.xy_err_mean < 0.3, "xy error {}", m.xy_err_mean);
     assert!(m.z_err_mean < 0.1, "z error {}", m.z_err_mean);
+    // Measured 0.11-0.13 m*g with the shipped parameters.
     assert!(
-        m.residual_force_mean <= 0.2,
+        m.residual_force_mean <= 0.16,
         "residual {}",
         m.residual_force_mean
     );
     assert!(m.residual_force_peak <= settings.residual_force_cap + 1e-9);
+}
+
+#[test]
+fn walk_turns_along_an_arc_in_mujoco() {
+    let settings = ControllerSettings {
+        body_mass: plamo_physics::humanoid::total_mass(),
+        ..Default::default()
+    };
+    let mut policy = ModelBasedController::new(settings.clone()).unwrap();
+    // 3 m straight, then a right turn of radius 5 m.
+    let path = ArcPath {
+        start: [0.0, 0.0],
+        speed: 1.0,
+        head_height: 1.47,
+        straight: 3.0,
+        radius: -5.0,
+    };
+    let scene = flat_scene(15.0);
+    let m = run_path(
+        BackendKind::Mujoco,
+        &scene,
+        &path,
+        12.0,
+        &mut policy,
+        &settings,
+    )
+    .unwrap();
+    eprintln!("{}", serde_json::to_string_pretty(&m).unwrap());
+    assert_eq!(m.falls, 0, "fell on the arc");
+    assert!(m.xy_err_mean < 0.3, "xy error {}", m.xy_err_mean);
+    assert!(
+        m.mean_reward.dir > 0.7,
+        "direction reward {}",
+        m.mean_reward.dir
+    );
 }

@@ -5,12 +5,15 @@
 //! - the plan's next waypoint (0.5 s ahead, relative to the head) gives the desired
 //!   velocity (so position errors are corrected; rate-limited to [`MAX_ACCEL`] so a
 //!   start from rest speeds up step by step) and the heading error;
+//! - the form's head height follows the plan at a bounded rate ([`MAX_HEIGHT_RATE`]);
 //! - the swing foot follows a path from its lift-off point to a SIMBICON foot
-//!   placement (ahead of the root by velocity and velocity error, sideways by the
-//!   lateral velocity), lifted over the local height map, by two-segment leg IK; the
-//!   path is followed kd/kp ahead, the lag of a PD servo behind a moving target;
-//! - legs switch at swing-foot touchdown (after half a step; 1.5 steps at most); the
-//!   leg targets' jump at the switch is faded out over [`SWITCH_BLEND`];
+//!   placement (ahead of the centre of mass by velocity, velocity error and an
+//!   integral of the speed error, sideways by the lateral velocity), lifted over the
+//!   local height map, by two-segment leg IK; the path is followed kd/kp ahead, the
+//!   lag of a PD servo behind a moving target;
+//! - legs switch at swing-foot touchdown (the swing foot as low as the stance foot,
+//!   after half a step; 1.5 steps at most); the leg targets' jump at the switch is
+//!   faded out over [`SWITCH_BLEND`];
 //! - the stance leg holds the pelvis height by IK, and its hip adds virtual-torso
 //!   torque from pelvis tilt error realised through the PD targets (offset = torque /
 //!   kp) minus the swing hip's torque (SIMBICON); the stance hip yaw turns the pelvis
@@ -25,7 +28,7 @@ pub use ik::{LegGeometry, leg_fk, leg_ik};
 pub use params::{DEFAULT_GAIT_PARAMS, FormParams, GAIT_PARAMS_VERSION, GaitParams, ResidualGains};
 
 use plamo_interfaces::CONTROL_DT;
-use plamo_physics::humanoid::{BODIES, JOINTS, joint_index};
+use plamo_physics::humanoid::{BODIES, JOINTS, joint_index, shape_mass};
 use plamo_physics::{FEET, NUM_BODIES, NUM_JOINTS};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
@@ -80,6 +83,8 @@ pub struct ModelBasedController {
     /// Hip anchors in the pelvis frame (right, left) \[m\].
     hip_offset: [[f64; 3]; 2],
     hip_kp: f64,
+    /// Body masses over the total mass, for the centre of mass \[-\].
+    mass_fraction: [f64; NUM_BODIES],
     /// 0 = right foot in stance, 1 = left.
     stance: usize,
     phase: f64,
@@ -92,10 +97,24 @@ pub struct ModelBasedController {
     switch_offset: [f64; NUM_JOINTS],
     /// Rate-limited desired velocity, heading frame \[m/s\].
     v_cmd: [f64; 2],
+    /// Rate-limited requested head height that selects the form \[m\].
+    h_cmd: f64,
+    /// Integral of the forward velocity error: the swing foot lands this much
+    /// closer (when lagging) \[m\].
+    foot_bias: f64,
 }
 
 /// Largest change of the desired velocity \[m/s^2\].
 const MAX_ACCEL: f64 = 1.5;
+
+/// Largest change of the requested head height that selects the form \[m/s\].
+const MAX_HEIGHT_RATE: f64 = 0.5;
+
+/// Bound of the integral foot-placement offset \[m\].
+const FOOT_BIAS_MAX: f64 = 0.15;
+
+/// Swing-foot clearance above the stance foot's that counts as touchdown \[m\].
+const TOUCHDOWN: f64 = 0.02;
 
 /// Time over which the target jump at a leg switch is faded out \[s\].
 const SWITCH_BLEND: f64 = 0.1;
@@ -126,9 +145,12 @@ impl ModelBasedController {
             thigh: -shin.offset[2],
             shin: -foot.offset[2],
         };
+        let masses = BODIES.map(|b| b.shapes.iter().map(shape_mass).sum::<f64>());
+        let total: f64 = masses.iter().sum();
         Ok(Self {
             params,
             settings,
+            mass_fraction: masses.map(|m| m / total),
             hip_offset: [right_thigh.offset, left_thigh.offset],
             hip_kp: JOINTS[joints.hip[0][1]].kp,
             joints,
@@ -141,6 +163,8 @@ impl ModelBasedController {
             last_targets: [0.0; NUM_JOINTS],
             switch_offset: [0.0; NUM_JOINTS],
             v_cmd: [0.0; 2],
+            foot_bias: 0.0,
+            h_cmd: 0.0,
         })
     }
 
@@ -227,6 +251,7 @@ impl Policy for ModelBasedController {
             *c += (p - *c).clamp(-dv_max, dv_max);
         }
         let v_des = [self.v_cmd[0], self.v_cmd[1], 0.0];
+
         let heading_err = if wp1[0].hypot(wp1[1]) > 0.2 {
             wrap_angle(wp1[1].atan2(wp1[0]))
         } else {
@@ -234,9 +259,20 @@ impl Policy for ModelBasedController {
         };
         let head_above_ground = obs.root_height + obs.head_pos[2];
         let head_des = head_above_ground + wp0[2];
-        let form = self.params.blend(head_des, speed);
+        // The form follows the requested height at a bounded rate: dropping into a
+        // crouch at once would let the body fall onto bent knees.
+        if !self.started {
+            self.h_cmd = head_above_ground;
+        }
+        let dh_max = MAX_HEIGHT_RATE * CONTROL_DT;
+        self.h_cmd += (head_des - self.h_cmd).clamp(-dh_max, dh_max);
+        let form = self.params.blend(self.h_cmd, speed);
         let pitch_des = form.trunk_pitch + form.lean_per_speed * speed;
         let pelvis_des = form.pelvis_height;
+        // Integral speed control: a walker that lags (the engines differ in how far a
+        // step carries) places its feet closer until the speed matches.
+        self.foot_bias = (self.foot_bias + form.speed_ki * (v_des[0] - vx) * CONTROL_DT)
+            .clamp(-FOOT_BIAS_MAX, FOOT_BIAS_MAX);
 
         // Gait phase and touchdown-triggered leg switch.
         let feet = [obs.body_pos[FEET[0]], obs.body_pos[FEET[1]]];
@@ -251,10 +287,12 @@ impl Policy for ModelBasedController {
             self.swing_start_rel_stance = sub(feet[sw], feet[self.stance]);
         } else {
             self.phase += CONTROL_DT;
-            let f = feet[swing];
-            let clearance =
-                obs.root_height + f[2] - Self::ground_at(obs, f[0], f[1]) - ANKLE_HEIGHT;
-            let touchdown = self.phase > 0.5 * form.step_time && clearance < 0.02;
+            // Clearance relative to the stance foot's: the ankle's resting height
+            // differs by engine (contact softness) and by how the foot lands.
+            let clearance = |f: [f64; 3]| obs.root_height + f[2] - Self::ground_at(obs, f[0], f[1]);
+            let rest = clearance(feet[self.stance]).min(ANKLE_HEIGHT + 0.03);
+            let touchdown =
+                self.phase > 0.5 * form.step_time && clearance(feet[swing]) < rest + TOUCHDOWN;
             if touchdown || self.phase > 1.5 * form.step_time {
                 self.stance = swing;
                 self.phase = 0.0;
@@ -271,8 +309,16 @@ impl Policy for ModelBasedController {
         let lead = JOINTS[j.hip[0][1]].kd / self.hip_kp;
         let s_lin = ((self.phase + lead) / form.step_time).min(1.0);
         let s = s_lin * s_lin * (3.0 - 2.0 * s_lin);
+        // Forward placement is measured from the centre of mass (body origins weighted
+        // by body mass): a leaning or crouching trunk carries it ahead of the pelvis.
+        let com_x: f64 = self
+            .mass_fraction
+            .iter()
+            .zip(&obs.body_pos)
+            .map(|(m, p)| m * p[0])
+            .sum();
         let final_xy = [
-            form.foot_fwd_gain * vx + form.foot_err_gain * (vx - v_des[0]),
+            com_x + form.foot_fwd_gain * vx + form.foot_err_gain * (vx - v_des[0]) - self.foot_bias,
             side(swing) * form.foot_width
                 + form.foot_lat_gain * vy
                 + form.foot_err_gain * (vy - v_des[1]),
@@ -408,6 +454,7 @@ impl Policy for ModelBasedController {
         self.started = false;
         self.phase = 0.0;
         self.switch_offset = [0.0; NUM_JOINTS];
+        self.foot_bias = 0.0;
     }
 
     fn name(&self) -> &str {

@@ -52,6 +52,10 @@ pub struct FormParams {
     pub stance_push: f64,
     /// Fraction of the swing hip's torque the stance hip cancels (SIMBICON) \[-\].
     pub swing_comp: f64,
+    /// Integral gain of forward speed error on foot placement (feet land closer while
+    /// the walker lags) \[1/s\]. Absent in older files: 0.
+    #[serde(default)]
+    pub speed_ki: f64,
 }
 
 impl FormParams {
@@ -81,6 +85,7 @@ impl FormParams {
             arm_swing: l(self.arm_swing, b.arm_swing),
             stance_push: l(self.stance_push, b.stance_push),
             swing_comp: l(self.swing_comp, b.swing_comp),
+            speed_ki: l(self.speed_ki, b.speed_ki),
         }
     }
 
