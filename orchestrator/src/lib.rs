@@ -2,8 +2,8 @@
 //! pictures and recordings the `plamo` CLI writes.
 #![warn(missing_docs)]
 
-pub mod export;
 pub mod eval;
+pub mod export;
 pub mod fmu_package;
 pub mod ipc;
 pub mod lockstep;

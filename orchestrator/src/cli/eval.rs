@@ -41,7 +41,8 @@ pub enum EvalCommand {
     Random(RandomArgs),
     /// Moving obstacles crossing the way: collision rate, re-planning on vs off.
     Dynamic(DynamicArgs),
-    /// Combine the shard folders of one sweep (`--shard i/n`) into one result.
+    /// Combine the shard folders of one sweep (`--shard i/n`) into one result, or
+    /// summarize one whole-sweep folder again.
     Merge(MergeArgs),
 }
 

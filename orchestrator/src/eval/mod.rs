@@ -228,7 +228,8 @@ fn read_meta(dir: &Path) -> anyhow::Result<Meta> {
     serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))
 }
 
-/// `plamo eval merge`: combine the shard folders `dirs` of one sweep into `out`.
+/// `plamo eval merge`: combine the shard folders `dirs` of one sweep into `out` (or
+/// summarize one whole-sweep folder again).
 pub fn merge(dirs: &[PathBuf], out: &Path) -> anyhow::Result<String> {
     if dirs.is_empty() {
         bail!("no shard folders given: plamo eval merge DIR... --out DIR");
@@ -238,11 +239,15 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> anyhow::Result<String> {
         .map(|d| read_meta(d))
         .collect::<anyhow::Result<Vec<_>>>()?;
     let first = &metas[0];
-    let Some(shard) = first.shard else {
-        bail!(
+    // One whole-sweep folder: summarize its rows again (after a summary change).
+    let whole = Shard::ALL;
+    let shard = match first.shard {
+        Some(s) => s,
+        None if dirs.len() == 1 => whole,
+        None => bail!(
             "{} holds a whole sweep, not a shard (run with --shard i/n)",
             dirs[0].display()
-        );
+        ),
     };
     let mut seen = vec![false; shard.count];
     for (d, m) in dirs.iter().zip(&metas) {
@@ -258,9 +263,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> anyhow::Result<String> {
                 dirs[0].display()
             );
         }
-        let s = m
-            .shard
-            .ok_or_else(|| anyhow::anyhow!("{} holds a whole sweep, not a shard", d.display()))?;
+        let s = m.shard.unwrap_or(whole);
         if s.count != shard.count {
             bail!(
                 "{} is shard {s}, {} is shard {shard}: shard counts differ",
