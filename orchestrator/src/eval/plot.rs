@@ -174,14 +174,16 @@ pub fn bars(
         }
         chart.draw_series(std::iter::once(Text::new(
             format!("{v:.2}"),
-            (i as f64 + 0.3, v + top * 0.02),
+            (x0 + 0.02, v + top * 0.02),
             (FAMILY, 13).into_font(),
         )))?;
-        chart.draw_series(std::iter::once(Text::new(
+        // Under the axis, in pixels: the chart area would clip it.
+        let (px, py) = chart.backend_coord(&(x0, 0.0));
+        root.draw(&Text::new(
             b.label.clone(),
-            (i as f64 + 0.1, -top * 0.03),
-            (FAMILY, 13).into_font(),
-        )))?;
+            (px, py + 8),
+            (FAMILY, 14).into_font(),
+        ))?;
     }
     root.present()?;
     Ok(())
