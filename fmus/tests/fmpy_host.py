@@ -146,6 +146,34 @@ def check_humanoid_string_parameters_and_a_scene_from_resources():
         shutil.rmtree(os.path.dirname(fmu), ignore_errors=True)
 
 
+def check_humanoid_physics_mujoco_runs_or_is_refused():
+    """A library built with MuJoCo ships libmujoco inside the FMU and walks with it;
+    one built without refuses `physics = mujoco` and says what is allowed."""
+    slave, vr, unzipdir = open_slave(HUMANOID)
+    try:
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.setString([vr["physics"]], ["mujoco"])
+        LOGS.clear()
+        try:
+            slave.exitInitializationMode()
+        except Exception:
+            text = " ".join(LOGS)
+            assert "built without the mujoco backend; allowed in this build: rapier" in text, text
+            print("       this FMU has no MuJoCo: refused with a message")
+            return
+        t, dt = 0.0, 0.009999999999999998
+        while t < 2.0 - 1e-9:
+            slave.doStep(currentCommunicationPoint=t, communicationStepSize=dt)
+            t += dt
+        head = slave.getReal([vr["head.z"], vr["speed"]])
+        assert head[0] > 1.2, f"head at z = {head[0]} after 2 s in MuJoCo"
+        print(f"       MuJoCo inside the FMU: head at z = {head[0]:.2f} m, speed {head[1]:.2f} m/s after 2 s")
+    finally:
+        slave.freeInstance()
+        shutil.rmtree(unzipdir, ignore_errors=True)
+
+
 def check_humanoid_misuse_is_refused_with_a_message():
     slave, vr, unzipdir = open_slave(HUMANOID)
     try:
@@ -274,6 +302,7 @@ CHECKS = [check_validate, check_closed_loop_with_string_parameters, check_misuse
           check_unknown_landmark, check_simulate_with_input_file, check_humanoid_validate,
           check_humanoid_simulate_with_a_ball_rolling_across_its_route,
           check_humanoid_string_parameters_and_a_scene_from_resources,
+          check_humanoid_physics_mujoco_runs_or_is_refused,
           check_humanoid_misuse_is_refused_with_a_message]
 
 passed = failed = 0
