@@ -8,7 +8,8 @@
 //! counts as 0.01); a step that ends between two control steps leaves the outputs at
 //! the last control step before it, and the next step catches up. Inputs are held
 //! over a step (zero-order hold): the obstacle states the host set before fmi2DoStep
-//! apply to every control step inside it.
+//! apply to every control step inside it. Once every instruction is done the run
+//! stops: later steps keep the outputs as they were at arrival.
 
 use plamo::lockstep::external::{PARKED_SAMPLE, in_process_with_external};
 use plamo::lockstep::{Lockstep, StepStatus};

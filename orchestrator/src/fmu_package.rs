@@ -184,3 +184,33 @@ pub fn package_all(
     }
     Ok(written)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ships_libmujoco_only_when_the_library_names_it_as_a_soname() {
+        let root = std::env::temp_dir().join(format!("plamo-bundle-{}", std::process::id()));
+        let lib = root.join("target/debug/libplamo_fmu.so");
+        std::fs::create_dir_all(lib.parent().unwrap()).unwrap();
+        // No soname: nothing to ship, even with a message that mentions the library.
+        let plain = b"\0libc.so.6\0libmujoco.so.3.17.0 is missing\0".to_vec();
+        assert!(bundled_libraries(&lib, &plain).unwrap().is_empty());
+        // A soname the build's third_party/ lacks: a clear error.
+        let linked = b"\0libm.so.6\0libmujoco.so.3.17.0\0libc.so.6\0".to_vec();
+        let e = bundled_libraries(&lib, &linked).unwrap_err().to_string();
+        assert!(
+            e.contains("libmujoco.so.3.17.0") && e.contains("install-mujoco.sh"),
+            "{e}"
+        );
+        // Where the rpath looks: shipped.
+        let mj = root.join("third_party/mujoco/lib/libmujoco.so.3.17.0");
+        std::fs::create_dir_all(mj.parent().unwrap()).unwrap();
+        std::fs::write(&mj, b"elf").unwrap();
+        let found = bundled_libraries(&lib, &linked).unwrap();
+        assert_eq!(found.len(), 1);
+        assert!(found[0].ends_with("libmujoco.so.3.17.0") && found[0].is_file());
+        let _ = std::fs::remove_dir_all(&root);
+    }
+}

@@ -9,7 +9,8 @@ use plamo::fmu_package::{find_library, package_all};
 /// FMU subcommands.
 #[derive(Debug, Subcommand)]
 pub enum FmuCommand {
-    /// Write `plamo-planner.fmu` (and every other FMU the library serves) into a folder.
+    /// Write `plamo.fmu` (the whole humanoid) and `plamo-planner.fmu` (the planner
+    /// alone), every FMU the library serves, into a folder.
     Build(BuildArgs),
 }
 
