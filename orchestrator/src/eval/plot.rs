@@ -31,7 +31,7 @@ fn range(v: impl Iterator<Item = f64>, floor_zero: bool) -> std::ops::Range<f64>
         return 0.0..1.0;
     }
     let lo = if floor_zero { lo.min(0.0) } else { lo };
-    let pad = ((hi - lo) * 0.12).max(0.05);
+    let pad = ((hi - lo) * 0.12).max(0.05 * hi.abs().max(1.0));
     (if floor_zero { lo } else { lo - pad })..(hi + pad)
 }
 
@@ -47,7 +47,13 @@ pub fn scatter(
     ensure_registered()?;
     let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE)?;
-    let all = || series.iter().flat_map(|s| s.points.iter());
+    // Axes fit the points that are drawn.
+    let all = || {
+        series
+            .iter()
+            .flat_map(|s| s.points.iter())
+            .filter(|p| p.0.is_finite() && p.1.is_finite())
+    };
     let xr = range(all().map(|p| p.0), false);
     let yr = range(all().map(|p| p.1), true);
     let mut chart = ChartBuilder::on(&root)
