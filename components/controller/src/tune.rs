@@ -48,7 +48,7 @@ impl Form {
         match self {
             Form::Walk => (1.47, [1.0, 2.0]),
             Form::Run => (1.47, [2.0, 4.0]),
-            Form::Crouch => (0.8, [0.5, 2.0]),
+            Form::Crouch => (0.8, [0.5, 1.5]),
         }
     }
 
@@ -85,6 +85,34 @@ const TUNED: [(&str, f64, f64); 17] = [
     ("residual.height_damping", 0.0, 10.0),
 ];
 
+/// Crouch-walk search box: a head at 0.8 m needs a low pelvis and a strong lean (the
+/// spine carries part of it); the residual gains stay the walk's.
+const TUNED_CROUCH: [(&str, f64, f64); 15] = [
+    ("step_time", 0.25, 0.6),
+    ("swing_height", 0.04, 0.14),
+    ("pelvis_height", 0.45, 0.75),
+    ("trunk_pitch", 0.0, 0.8),
+    ("spine_pitch", 0.0, 1.0),
+    ("foot_fwd_gain", 0.05, 0.40),
+    ("foot_err_gain", 0.0, 0.25),
+    ("foot_width", 0.05, 0.16),
+    ("foot_lat_gain", 0.0, 0.45),
+    ("torso_kp", 200.0, 1500.0),
+    ("torso_kd", 10.0, 150.0),
+    ("stance_push", 0.0, 0.2),
+    ("swing_comp", 0.0, 1.0),
+    ("speed_ki", 0.0, 0.5),
+    ("lean_per_speed", 0.0, 0.15),
+];
+
+/// The search box of a form.
+fn tuned(form: Form) -> &'static [(&'static str, f64, f64)] {
+    match form {
+        Form::Crouch => &TUNED_CROUCH,
+        Form::Walk | Form::Run => &TUNED,
+    }
+}
+
 fn field<'a>(p: &'a mut GaitParams, form: Form, name: &str) -> &'a mut f64 {
     match name {
         "residual.vel_gain" => return &mut p.residual.vel_gain,
@@ -107,6 +135,7 @@ fn field<'a>(p: &'a mut GaitParams, form: Form, name: &str) -> &'a mut f64 {
         "torso_kd" => &mut f.torso_kd,
         "stance_push" => &mut f.stance_push,
         "speed_ki" => &mut f.speed_ki,
+        "spine_pitch" => &mut f.spine_pitch,
         _ => &mut f.swing_comp,
     }
 }
@@ -229,7 +258,7 @@ pub fn evaluate(params: &GaitParams, s: &TuneSettings, seed: u64) -> Result<Cost
 
 fn decode(base: &GaitParams, form: Form, x: &[f64]) -> GaitParams {
     let mut p = *base;
-    for (&(name, lo, hi), v) in TUNED.iter().zip(x) {
+    for (&(name, lo, hi), v) in tuned(form).iter().zip(x) {
         *field(&mut p, form, name) = lo + (hi - lo) * v.clamp(0.0, 1.0);
     }
     p
@@ -237,7 +266,7 @@ fn decode(base: &GaitParams, form: Form, x: &[f64]) -> GaitParams {
 
 fn encode(base: &GaitParams, form: Form) -> Vec<f64> {
     let mut p = *base;
-    TUNED
+    tuned(form)
         .iter()
         .map(|&(name, lo, hi)| ((*field(&mut p, form, name) - lo) / (hi - lo)).clamp(0.0, 1.0))
         .collect()
