@@ -39,7 +39,8 @@ if ! command -v valgrind >/dev/null; then
 fi
 leaks_bin=$(cargo test --locked -p plamo-fmu --test leaks --no-run 2>&1 |
     sed -n 's/.*Executable tests\/leaks.rs (\(.*\))$/\1/p')
-valgrind --quiet --leak-check=full --errors-for-leak-kinds=definite,indirect --error-exitcode=9 \
+valgrind --quiet --leak-check=full --show-leak-kinds=definite,indirect \
+    --errors-for-leak-kinds=definite,indirect --error-exitcode=9 \
     "$leaks_bin" --test-threads=1
 
 # ---- Replay exports and viewer (issue 9) ----------------------------------------
