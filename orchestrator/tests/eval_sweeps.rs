@@ -126,6 +126,7 @@ fn slalom_is_deterministic_and_merges() {
             "slalom.md",
             "slalom_failure.png",
             "slalom_error.png",
+            "slalom_paths.png",
         ],
     );
 }

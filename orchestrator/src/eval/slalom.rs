@@ -12,10 +12,11 @@ use plamo_planner::PlannerSettings;
 use plotters::style::RGBColor;
 use serde::{Deserialize, Serialize};
 
-use super::episode::{EpisodeSpec, run_episode};
+use super::episode::{EpisodeSpec, parse_track, plan, run_episode};
 use super::plot::{Series, scatter};
 use super::table::field;
 use super::{Experiment, Meta, RunOptions, Table, command_line, mean};
+use crate::viz::{ColorBar, MapOverlay, OverlayPath, color_at, render_map};
 
 /// Acceleration limit that never binds \[m/s^2\]: a "constant speed" plan keeps its
 /// speed through every turn and starts at full speed.
@@ -196,6 +197,89 @@ impl Slalom {
         })
     }
 
+    /// The map: the first QP point's plan coloured by planned speed, and the head
+    /// track of the first run of the slowest constant speed and of every QP point.
+    fn paths_map(
+        &self,
+        runs: &Table,
+        meta: &Meta,
+        points: &[Point],
+        out: &Path,
+    ) -> anyhow::Result<()> {
+        const STOPS: [[u8; 3]; 3] = [[40, 60, 220], [240, 200, 40], [220, 30, 30]];
+        const PALETTE: [[u8; 3]; 7] = [
+            [200, 30, 30],
+            [30, 60, 200],
+            [20, 150, 60],
+            [150, 40, 170],
+            [0, 150, 160],
+            [200, 120, 0],
+            [90, 90, 90],
+        ];
+        let scene = plamo_scenes::builtin("slalom")?;
+        let mut overlay = MapOverlay {
+            title: format!(
+                "slalom ({}): planned speed and head tracks (first run of each)",
+                meta.physics
+            ),
+            ..Default::default()
+        };
+        if let Some(q) = points.iter().find(|p| matches!(p, Point::Qp(_))) {
+            let spec = EpisodeSpec {
+                scene: &scene,
+                instructions: INSTRUCTION.into(),
+                backend: plamo_physics::BackendKind::Rapier,
+                seed: self.seed,
+                planner: q.settings(),
+                max_seconds: None,
+            };
+            if let Ok((_, p)) = plan(&spec) {
+                let pts: Vec<_> = p.route().iter().flat_map(|t| t.points.iter()).collect();
+                let vmax = pts.iter().map(|p| p.v).fold(0.1, f64::max);
+                overlay.paths.push(OverlayPath {
+                    points: pts.iter().map(|p| [p.x, p.y]).collect(),
+                    colors: pts.iter().map(|p| color_at(&STOPS, p.v / vmax)).collect(),
+                    width: 6,
+                    dashed: false,
+                    label: Some(format!("plan, {}", q.label())),
+                });
+                overlay.colorbar = Some(ColorBar {
+                    label: "planned speed [m/s]".into(),
+                    min: 0.0,
+                    max: vmax,
+                    colors: STOPS.to_vec(),
+                });
+            }
+        }
+        let slowest = points
+            .iter()
+            .enumerate()
+            .filter_map(|(i, p)| match p {
+                Point::Constant(v) => Some((i, *v)),
+                Point::Qp(_) => None,
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, _)| i);
+        let shown: Vec<usize> = slowest
+            .into_iter()
+            .chain((0..points.len()).filter(|&i| matches!(points[i], Point::Qp(_))))
+            .collect();
+        for (k, &i) in shown.iter().enumerate() {
+            let Some(r) = (0..runs.rows.len()).find(|&r| runs.usize(r, "point").ok() == Some(i))
+            else {
+                continue;
+            };
+            overlay.paths.push(OverlayPath {
+                points: parse_track(runs.str(r, "track")?),
+                colors: vec![PALETTE[k % PALETTE.len()]],
+                width: 2,
+                dashed: matches!(points[i], Point::Constant(_)),
+                label: Some(points[i].label()),
+            });
+        }
+        render_map(&scene, &overlay, &out.join("slalom_paths.png"))
+    }
+
     fn points(&self) -> Vec<Point> {
         self.speeds
             .iter()
@@ -205,7 +289,7 @@ impl Slalom {
     }
 }
 
-const COLUMNS: [&str; 20] = [
+const COLUMNS: [&str; 21] = [
     "job",
     "point",
     "label",
@@ -226,6 +310,7 @@ const COLUMNS: [&str; 20] = [
     "planned_time",
     "planned_length",
     "planning_error",
+    "track",
 ];
 
 impl Experiment for Slalom {
@@ -287,6 +372,7 @@ impl Experiment for Slalom {
             ep.planned_time.to_string(),
             ep.planned_length.to_string(),
             field(ep.planning_error.as_deref().unwrap_or("")),
+            ep.track_field(),
         ])
     }
 
@@ -429,6 +515,7 @@ impl Experiment for Slalom {
             ]);
         }
         std::fs::write(out.join("summary.csv"), csv.to_csv())?;
+        self.paths_map(runs, meta, &points, out)?;
         let short = |s: &PointStats| {
             s.label
                 .replace("const ", "")
@@ -488,9 +575,7 @@ impl Experiment for Slalom {
                 missing.join(", ")
             ));
         }
-        md.push_str(
-            "\n![failure vs time](slalom_failure.png)\n![error vs time](slalom_error.png)\n",
-        );
+        md.push_str("\n![failure vs time](slalom_failure.png)\n![error vs time](slalom_error.png)\n![paths](slalom_paths.png)\n");
         Ok(md)
     }
 }
