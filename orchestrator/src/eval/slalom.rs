@@ -198,7 +198,8 @@ impl Slalom {
     }
 
     /// The map: the first QP point's plan coloured by planned speed, and the head
-    /// track of the first run of the slowest constant speed and of every QP point.
+    /// track of the first run of the slowest and fastest constant speeds and of the
+    /// first QP point.
     fn paths_map(
         &self,
         runs: &Table,
@@ -251,19 +252,19 @@ impl Slalom {
                 });
             }
         }
-        let slowest = points
-            .iter()
-            .enumerate()
-            .filter_map(|(i, p)| match p {
+        // Few enough for the map's legend: the slowest and fastest constant speeds and
+        // the first QP point.
+        let constants = || {
+            points.iter().enumerate().filter_map(|(i, p)| match p {
                 Point::Constant(v) => Some((i, *v)),
                 Point::Qp(_) => None,
             })
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(i, _)| i);
-        let shown: Vec<usize> = slowest
-            .into_iter()
-            .chain((0..points.len()).filter(|&i| matches!(points[i], Point::Qp(_))))
-            .collect();
+        };
+        let slowest = constants().min_by(|a, b| a.1.total_cmp(&b.1)).map(|c| c.0);
+        let fastest = constants().max_by(|a, b| a.1.total_cmp(&b.1)).map(|c| c.0);
+        let first_qp = (0..points.len()).find(|&i| matches!(points[i], Point::Qp(_)));
+        let mut shown: Vec<usize> = [slowest, fastest, first_qp].into_iter().flatten().collect();
+        shown.dedup();
         for (k, &i) in shown.iter().enumerate() {
             let Some(r) = (0..runs.rows.len()).find(|&r| runs.usize(r, "point").ok() == Some(i))
             else {
