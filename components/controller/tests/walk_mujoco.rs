@@ -85,3 +85,33 @@ fn walk_turns_along_an_arc_in_mujoco() {
         m.mean_reward.dir
     );
 }
+
+#[test]
+fn crouch_walk_at_1_m_per_s_does_not_fall_in_mujoco() {
+    let settings = ControllerSettings {
+        body_mass: plamo_physics::humanoid::total_mass(),
+        ..Default::default()
+    };
+    let mut policy = ModelBasedController::new(settings.clone()).unwrap();
+    let path = StraightPath {
+        start: [0.0, 0.0],
+        speed: 1.0,
+        head_height: 0.8,
+    };
+    let scene = flat_scene(15.0);
+    let m = run_straight(
+        BackendKind::Mujoco,
+        &scene,
+        path,
+        10.0,
+        &mut policy,
+        &settings,
+    )
+    .unwrap();
+    eprintln!("{}", serde_json::to_string_pretty(&m).unwrap());
+    assert_eq!(m.falls, 0, "fell crouch-walking");
+    assert!(m.xy_err_mean < 0.3, "xy error {}", m.xy_err_mean);
+    // The shipped crouch gets the head down to ~1.05 m of the requested 0.8 m (Z
+    // 0.25 m; the paper reaches 0.03 m): this bounds the regression, not the goal.
+    assert!(m.z_err_mean < 0.3, "z error {}", m.z_err_mean);
+}
