@@ -26,7 +26,9 @@ cargo test --workspace --all-features --locked
 # FMPy is a real external FMI host: it imports the packaged FMUs as a user's tool would.
 echo "== FMU hosts: FMPy"
 python3 -m pip install --quiet --disable-pip-version-check "fmpy==0.3.32"
-cargo build --quiet --locked -p plamo-fmu
+# The same features as the test build above, so nothing is compiled twice; the packager
+# ships libmujoco next to a MuJoCo-built library.
+cargo build --quiet --locked --all-features -p plamo-fmu
 cargo run --quiet --locked --all-features -- fmu build --out target/fmu-test
 python3 fmus/tests/fmpy_host.py target/fmu-test
 # The FMU's 1000 instantiate/free cycles (and full initialise/step cycles) once more
@@ -37,7 +39,7 @@ if ! command -v valgrind >/dev/null; then
     $sudo_ apt-get update -qq
     $sudo_ apt-get install -y -qq --no-install-recommends valgrind >/dev/null
 fi
-leaks_bin=$(cargo test --locked -p plamo-fmu --test leaks --no-run 2>&1 |
+leaks_bin=$(cargo test --locked --all-features -p plamo-fmu --test leaks --no-run 2>&1 |
     sed -n 's/.*Executable tests\/leaks.rs (\(.*\))$/\1/p')
 valgrind --quiet --leak-check=full --show-leak-kinds=definite,indirect \
     --errors-for-leak-kinds=definite,indirect --error-exitcode=9 \
