@@ -310,6 +310,11 @@ impl PhysicsBackend for MujocoBackend {
             self.obstacles[k] = s;
         }
         self.data.step();
+        // mj_step computes body poses before it integrates, so xpos/xquat would lag
+        // qpos by one step (up to 2.3 cm of head at walking speed); bring them to the
+        // new qpos. This only reads positions: the next mj_step recomputes everything,
+        // so the dynamics are unchanged. Contacts stay those found at the step's start.
+        self.data.kinematics();
         self.tick = self.tick.advanced(1);
         // MuJoCo resets the data itself on a bad acceleration and only counts a warning.
         let warnings = self.bad_qacc_count();
