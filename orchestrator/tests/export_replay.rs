@@ -245,9 +245,9 @@ fn rapier_run_exports_a_glb_whose_animation_puts_the_head_where_physics_did() {
 #[cfg(feature = "mujoco")]
 #[test]
 fn mujoco_run_exports_a_glb_whose_animation_puts_the_head_where_physics_did() {
-    // MuJoCo reports body poses from before its last integration step, so its head
-    // lags the joint state by one 120 Hz step (up to ~2.5 cm at walking speed).
-    check_backend("mujoco", 0.04);
+    // Body poses are brought to the new joint state after every step (they once
+    // lagged it by one 120 Hz step, up to 2.5 cm): the same bound as rapier.
+    check_backend("mujoco", 0.0005);
 }
 
 #[test]
