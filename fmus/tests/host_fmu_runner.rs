@@ -4,23 +4,14 @@
 
 use std::collections::HashMap;
 
-use fmu_runner::{Fmu, FmuInstance, fmi2Type};
-use plamo::fmu_package::{find_library, package_all};
+use fmu_runner::FmuInstance;
+
+mod support;
+use support::load_fmu;
 
 #[test]
 fn a_host_character_following_the_planner_fmu_reaches_every_landmark() {
-    let library = find_library().expect("cargo builds libplamo_fmu.so for this test");
-    let out = std::env::temp_dir().join(format!("plamo-fmu-runner-{}", std::process::id()));
-    let packaged = package_all(&library, &out, &[]).unwrap();
-    let planner = packaged
-        .iter()
-        .find(|p| p.model_name == "plamo-planner")
-        .expect("planner FMU packaged");
-
-    let fmu = Fmu::unpack(&planner.path)
-        .unwrap()
-        .load(fmi2Type::fmi2CoSimulation)
-        .unwrap();
+    let (fmu, out) = load_fmu("plamo-planner", "fmu-runner");
     let vars = fmu.variables();
     let var = |n: &str| {
         vars.get(n)

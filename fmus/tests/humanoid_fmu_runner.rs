@@ -7,34 +7,18 @@
 use std::collections::HashMap;
 
 use fmu_runner::model_description::{Causality, ScalarVariable, SignalType};
-use fmu_runner::{Fmu, FmuInstance, FmuLibrary, fmi2Type};
-use plamo::fmu_package::{find_library, package_all};
-use plamo::lockstep::external::{PARKED_SAMPLE, in_process_with_external};
+use fmu_runner::{FmuInstance, FmuLibrary};
+use plamo::lockstep::external::PARKED_SAMPLE;
 use plamo::lockstep::{Lockstep, StepStatus};
-use plamo::spec::RunSpec;
-use plamo_controller::ControllerSettings;
-use plamo_interfaces::ObstacleSample;
-use plamo_physics::{BackendKind, JOINT_NAMES};
+use plamo_physics::JOINT_NAMES;
 use plamo_planner::FLAG_FINISHED;
-use plamo_scenes::ObstacleShape;
 
-/// The FMU's default route (fmu-runner has no string API): rapier completes it.
-const INSTRUCTIONS: &str = "Walk from the fountain to the sandbox";
-/// A communication step that is no multiple of the 1/30 s control step, accumulated
-/// the way hosts do.
-const HOST_STEP: f64 = 0.01;
+mod support;
+use support::{HOST_STEP, externals, load_fmu, route_lockstep, set_ball, start_instance};
+
 const STOP: f64 = 20.0;
 /// When the ball has crossed the route (t = 7 s) \[ticks\].
 const COMPARE_TICK: u64 = 7 * 120;
-
-/// The host's ball: rolls along +x across the route (fountain (4, 14) to sandbox
-/// (4, 4)) at y = 9, passing x = 4 at t = 5 s.
-fn ball(t: f64) -> ObstacleSample {
-    ObstacleSample {
-        position: [-1.0 + t, 9.0, 0.3],
-        velocity: [1.0, 0.0, 0.0],
-    }
-}
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Out {
@@ -110,22 +94,8 @@ fn fmu_outputs(
 
 #[test]
 fn fmu_runner_outputs_equal_the_in_process_lockstep_bit_for_bit() {
-    let library = find_library().expect("cargo builds libplamo_fmu.so for this test");
-    let dir = std::env::temp_dir().join(format!("plamo-humanoid-fmu-{}", std::process::id()));
-    let packaged = package_all(&library, &dir, &[]).unwrap();
-    let humanoid = packaged
-        .iter()
-        .find(|p| p.model_name == "plamo")
-        .expect("plamo.fmu packaged");
-    let fmu = Fmu::unpack(&humanoid.path)
-        .unwrap()
-        .load(fmi2Type::fmi2CoSimulation)
-        .unwrap();
+    let (fmu, dir) = load_fmu("plamo", "humanoid-fmu");
     let vars = fmu.variables();
-    let var = |n: &str| {
-        vars.get(n)
-            .unwrap_or_else(|| panic!("variable {n} in modelDescription.xml"))
-    };
     let mut outputs: Vec<&ScalarVariable> = vars
         .values()
         .filter(|v| matches!(v.causality, Causality::Output))
@@ -134,52 +104,8 @@ fn fmu_runner_outputs_equal_the_in_process_lockstep_bit_for_bit() {
     assert_eq!(outputs.len(), 11 + JOINT_NAMES.len() + 6);
 
     // The in-process reference: the same spec, the same lockstep, the same ball.
-    let spec = RunSpec {
-        scene: "playground".into(),
-        instructions: vec![INSTRUCTIONS.into()],
-        backend: BackendKind::Rapier,
-        seed: 3,
-    };
-    let scene = spec.load_scene().unwrap();
-    let count = plamo_planner::parse_instructions(INSTRUCTIONS, &scene)
-        .unwrap()
-        .len();
-    let links =
-        in_process_with_external(&spec, &scene, &[ObstacleShape::Sphere { radius: 0.3 }; 4])
-            .unwrap();
-    let mut reference = Lockstep::start(
-        links,
-        scene.clone(),
-        &[count],
-        &ControllerSettings::default(),
-        1e6,
-    )
-    .unwrap();
-    let externals = |t: f64| [PARKED_SAMPLE, ball(t), PARKED_SAMPLE, PARKED_SAMPLE];
-
-    let inst = FmuInstance::instantiate(&fmu, false).unwrap();
-    inst.setup_experiment(0.0, None, None).unwrap();
-    inst.enter_initialization_mode().unwrap();
-    inst.set_integers(&[(var("seed"), 3)].into_iter().collect())
-        .unwrap();
-    inst.set_booleans(&[(var("obstacle[2].active"), 1)].into_iter().collect())
-        .unwrap();
-    let set_ball = |t: f64| {
-        let b = ball(t);
-        let m: HashMap<_, _> = [
-            (var("obstacle[2].x"), b.position[0]),
-            (var("obstacle[2].y"), b.position[1]),
-            (var("obstacle[2].z"), b.position[2]),
-            (var("obstacle[2].vx"), b.velocity[0]),
-            (var("obstacle[2].vy"), b.velocity[1]),
-            (var("obstacle[2].vz"), b.velocity[2]),
-        ]
-        .into_iter()
-        .collect();
-        inst.set_reals(&m).unwrap();
-    };
-    set_ball(0.0);
-    inst.exit_initialization_mode().unwrap();
+    let (mut reference, count) = route_lockstep(3);
+    let inst = start_instance(&fmu, 3);
     reference.set_external_obstacles(&externals(0.0)).unwrap();
 
     let (mut t, mut finished, mut points, mut max_instruction) = (0.0_f64, false, 0, 0);
@@ -203,7 +129,7 @@ fn fmu_runner_outputs_equal_the_in_process_lockstep_bit_for_bit() {
             break;
         }
         // Host: set the inputs for the coming step, then step.
-        set_ball(t);
+        set_ball(&inst, &fmu, t);
         inst.do_step(t, HOST_STEP, true).unwrap();
         reference.set_external_obstacles(&externals(t)).unwrap();
         let end = t + HOST_STEP;
@@ -228,11 +154,7 @@ fn fmu_runner_outputs_equal_the_in_process_lockstep_bit_for_bit() {
 
     // Physics does not collide with host obstacles, so the ball can only change the
     // run through the planner's re-planning: without it the run must differ.
-    let links =
-        in_process_with_external(&spec, &scene, &[ObstacleShape::Sphere { radius: 0.3 }; 4])
-            .unwrap();
-    let mut no_ball =
-        Lockstep::start(links, scene, &[count], &ControllerSettings::default(), 1e6).unwrap();
+    let (mut no_ball, _) = route_lockstep(3);
     no_ball.set_external_obstacles(&[PARKED_SAMPLE; 4]).unwrap();
     while no_ball.tick().0 < COMPARE_TICK {
         no_ball.step().unwrap();
