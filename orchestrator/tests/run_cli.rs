@@ -203,9 +203,9 @@ fn a_sigkilled_component_stops_the_run_and_leaves_no_files() {
     assert_eq!(leftovers(run), Vec::<PathBuf>::new());
 }
 
-#[test]
-fn a_crashing_component_is_named_with_its_tick() {
-    let run = "cli-test-crash";
+/// A 3 s multi-process run whose physics process has `fault`; it must fail. Returns
+/// its stderr.
+fn failing_run_with_fault(run: &str, fault: &str) -> String {
     let o = plamo(&[
         "--instructions",
         ROUTE,
@@ -215,12 +215,18 @@ fn a_crashing_component_is_named_with_its_tick() {
         "--run",
         run,
         "--inject-fault",
-        "crash@40",
+        fault,
     ])
     .output()
     .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn a_crashing_component_is_named_with_its_tick() {
+    let run = "cli-test-crash";
+    let err = failing_run_with_fault(run, "crash@40");
     assert!(
         err.contains("physics died") && err.contains("tick 40"),
         "{err}"
@@ -231,21 +237,7 @@ fn a_crashing_component_is_named_with_its_tick() {
 #[test]
 fn a_wrong_tick_is_an_error() {
     let run = "cli-test-tick";
-    let o = plamo(&[
-        "--instructions",
-        ROUTE,
-        "--max-seconds",
-        "3",
-        "--processes",
-        "--run",
-        run,
-        "--inject-fault",
-        "wrong-tick@8",
-    ])
-    .output()
-    .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success());
+    let err = failing_run_with_fault(run, "wrong-tick@8");
     assert!(
         err.contains("physics: expected a message for tick 12, got tick 16"),
         "{err}"
