@@ -9,5 +9,6 @@ pub mod ipc;
 pub mod lockstep;
 pub mod processes;
 pub mod record;
+pub mod seeds;
 pub mod spec;
 pub mod viz;

@@ -8,6 +8,7 @@ use plamo_planner::{Planner, PlannerComponent, PlannerSettings, Source, parse_in
 use plamo_scenes::Scene;
 
 use crate::lockstep::{InProcess, Links, RunError};
+use crate::seeds::splitmix;
 
 /// Largest start-heading perturbation drawn from the seed \[rad\].
 pub const SEED_YAW_JITTER: f64 = 0.05;
@@ -27,14 +28,6 @@ pub struct RunSpec {
 
 fn setup(e: impl std::fmt::Display) -> RunError {
     RunError::Setup(e.to_string())
-}
-
-/// SplitMix64: a fixed, platform-independent mix of the seed.
-fn splitmix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
 }
 
 impl RunSpec {
@@ -69,7 +62,7 @@ impl RunSpec {
         };
         let [x, y] = at(name)?;
         let [tx, ty] = at(&first.target)?;
-        let r = splitmix(self.seed ^ splitmix(k as u64));
+        let r = splitmix(&mut (self.seed ^ splitmix(&mut (k as u64))));
         let unit = (r >> 11) as f64 / (1u64 << 53) as f64;
         let yaw = (ty - y).atan2(tx - x) + (2.0 * unit - 1.0) * SEED_YAW_JITTER;
         Ok(Placement { x, y, yaw })

@@ -20,7 +20,8 @@ use super::episode::{EpisodeSpec, parse_track, plan, run_episode};
 use super::plot::{Bar, bars};
 use super::random::Z95;
 use super::table::field;
-use super::{Experiment, Meta, RunOptions, Table, command_line, mean, unit, wilson};
+use super::{Experiment, Meta, RunOptions, Table, command_line, mean, wilson};
+use crate::seeds::unit;
 use crate::viz::{MapOverlay, OverlayPath, render_map};
 
 /// The instruction of every run.

@@ -388,18 +388,14 @@ pub fn mean(v: &[f64]) -> f64 {
     }
 }
 
-/// SplitMix64 step: the eval's own deterministic stream of numbers from a seed.
-pub fn splitmix(state: &mut u64) -> u64 {
-    *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
-/// Uniform in \[0, 1) from the stream.
-pub fn unit(state: &mut u64) -> f64 {
-    (splitmix(state) >> 11) as f64 / (1u64 << 53) as f64
+/// The jobs of a sweep over `points`: each point `runs` times, run r seeded
+/// `seed + r`, as (point index, point, seed).
+pub fn point_runs<P: Copy>(points: &[P], runs: usize, seed: u64) -> Vec<(usize, P, u64)> {
+    points
+        .iter()
+        .enumerate()
+        .flat_map(|(i, &p)| (0..runs as u64).map(move |r| (i, p, seed.wrapping_add(r))))
+        .collect()
 }
 
 #[cfg(test)]

@@ -18,7 +18,8 @@ use serde::{Deserialize, Serialize};
 use super::episode::{EpisodeSpec, run_episode};
 use super::plot::{Bar, bars};
 use super::table::field;
-use super::{Experiment, Meta, RunOptions, Table, command_line, mean, splitmix, wilson};
+use super::{Experiment, Meta, RunOptions, Table, command_line, mean, wilson};
+use crate::seeds::splitmix;
 
 /// The four locomotion forms, as instruction verbs.
 pub const FORMS: [&str; 4] = ["crawl", "crouch-walk", "walk", "run"];
