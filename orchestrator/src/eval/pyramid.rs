@@ -94,13 +94,7 @@ impl Experiment for Pyramid {
     }
 
     fn jobs(&self) -> anyhow::Result<Vec<Self::Job>> {
-        Ok(self
-            .c
-            .iter()
-            .enumerate()
-            .flat_map(|(i, &c)| (0..self.runs as u64).map(move |r| (i, c, r)))
-            .map(|(i, c, r)| (i, c, self.seed.wrapping_add(r)))
-            .collect())
+        Ok(super::point_runs(&self.c, self.runs, self.seed))
     }
 
     fn run_job(

@@ -323,13 +323,7 @@ impl Experiment for Slalom {
     }
 
     fn jobs(&self) -> anyhow::Result<Vec<Self::Job>> {
-        Ok(self
-            .points()
-            .into_iter()
-            .enumerate()
-            .flat_map(|(i, p)| (0..self.runs).map(move |r| (i, p, r as u64)))
-            .map(|(i, p, r)| (i, p, self.seed.wrapping_add(r)))
-            .collect())
+        Ok(super::point_runs(&self.points(), self.runs, self.seed))
     }
 
     fn run_job(
