@@ -1,125 +1,29 @@
 //! The model-based tracking controller, the default policy (no network needed).
 //!
-//! A SIMBICON-style biped gait whose parameters ([`GaitParams`]) are blended by the
-//! requested head height (crouch-walk <-> walk) and speed (walk <-> run):
-//! - the plan's next waypoint (0.5 s ahead, relative to the head) gives the desired
-//!   velocity (so position errors are corrected; rate-limited to [`MAX_ACCEL`] so a
-//!   start from rest speeds up step by step) and the heading error;
-//! - the form's head height follows the plan at a bounded rate ([`MAX_HEIGHT_RATE`]);
-//! - the swing foot follows a path from its lift-off point to a SIMBICON foot
-//!   placement (ahead of the centre of mass by velocity, velocity error and an
-//!   integral of the speed error, sideways by the lateral velocity), lifted over the
-//!   local height map, by two-segment leg IK; the path is followed kd/kp ahead, the
-//!   lag of a PD servo behind a moving target;
-//! - legs switch at swing-foot touchdown (the swing foot as low as the stance foot,
-//!   after half a step; 1.5 steps at most); the leg targets' jump at the switch is
-//!   faded out over [`SWITCH_BLEND`];
-//! - the stance leg holds the pelvis height by IK, and its hip adds virtual-torso
-//!   torque from pelvis tilt error realised through the PD targets (offset = torque /
-//!   kp) minus the swing hip's torque (SIMBICON); the stance hip yaw turns the pelvis
-//!   towards the path;
-//! - a bounded residual root wrench (cap in [`ControllerSettings`]) helps with speed,
-//!   height and tilt; it is part of the action and reported by the metrics.
+//! One gait per family of forms, chosen by the requested head height and speed:
+//! [`biped`] walks, runs and crouch-walks (its parameters blended continuously).
 
+mod biped;
 mod ik;
 mod params;
 
 pub use ik::{LegGeometry, leg_fk, leg_ik};
 pub use params::{DEFAULT_GAIT_PARAMS, FormParams, GAIT_PARAMS_VERSION, GaitParams, ResidualGains};
 
-use plamo_interfaces::CONTROL_DT;
-use plamo_physics::humanoid::{BODIES, JOINTS, joint_index, shape_mass};
-use plamo_physics::{FEET, NUM_BODIES, NUM_JOINTS};
-use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
+use plamo_physics::{NUM_BODIES, NUM_JOINTS};
 
 use crate::error::{ControllerError, Result};
-use crate::math::{from_heading_frame, wrap_angle};
-use crate::observation::{Observation, ObservationLayout, WAYPOINT_SPACING};
+use crate::observation::{Observation, ObservationLayout};
 use crate::policy::{Action, Policy, RootWrench};
-use crate::settings::{ControllerSettings, GRAVITY};
-
-/// Height of the ankle (foot body origin) above the sole \[m\].
-const ANKLE_HEIGHT: f64 = 0.07;
-
-/// Joint indices the gait drives, per leg (right, left) and for the upper body.
-#[derive(Debug, Clone, Copy)]
-struct Joints {
-    hip: [[usize; 3]; 2],
-    knee: [usize; 2],
-    ankle: [[usize; 2]; 2],
-    spine: [usize; 3],
-    neck_y: usize,
-    shoulder: [[usize; 2]; 2],
-    elbow: [usize; 2],
-}
-
-fn idx(name: &str) -> usize {
-    // Names below are the humanoid's own: checked by the unit test `joints_resolve`.
-    joint_index(name).unwrap_or_else(|| panic!("humanoid has no joint `{name}`"))
-}
-
-impl Joints {
-    fn resolve() -> Self {
-        let side = ["right", "left"];
-        Joints {
-            hip: side.map(|s| ["x", "y", "z"].map(|a| idx(&format!("{s}_hip_{a}")))),
-            knee: side.map(|s| idx(&format!("{s}_knee"))),
-            ankle: side.map(|s| ["y", "x"].map(|a| idx(&format!("{s}_ankle_{a}")))),
-            spine: ["x", "y", "z"].map(|a| idx(&format!("spine_{a}"))),
-            neck_y: idx("neck_y"),
-            shoulder: side.map(|s| ["x", "y"].map(|a| idx(&format!("{s}_shoulder_{a}")))),
-            elbow: side.map(|s| idx(&format!("{s}_elbow"))),
-        }
-    }
-}
+use crate::settings::ControllerSettings;
+use biped::BipedGait;
 
 /// The model-based controller (see the module docs).
 #[derive(Debug, Clone)]
 pub struct ModelBasedController {
-    params: GaitParams,
-    settings: ControllerSettings,
-    joints: Joints,
-    legs: LegGeometry,
-    /// Hip anchors in the pelvis frame (right, left) \[m\].
-    hip_offset: [[f64; 3]; 2],
-    hip_kp: f64,
-    /// Body masses over the total mass, for the centre of mass \[-\].
-    mass_fraction: [f64; NUM_BODIES],
-    /// 0 = right foot in stance, 1 = left.
-    stance: usize,
-    phase: f64,
-    swing_start_rel_stance: [f64; 3],
-    started: bool,
-    last_wrench: RootWrench,
-    /// Leg targets of the previous action \[rad\] (for the cross-fade at a switch).
-    last_targets: [f64; NUM_JOINTS],
-    /// Target jump at the last leg switch, faded out over [`SWITCH_BLEND`] \[rad\].
-    switch_offset: [f64; NUM_JOINTS],
-    /// Rate-limited desired velocity, heading frame \[m/s\].
-    v_cmd: [f64; 2],
-    /// Rate-limited requested head height that selects the form \[m\].
-    h_cmd: f64,
-    /// Integral of the forward velocity error: the swing foot lands this much
-    /// closer (when lagging) \[m\].
-    foot_bias: f64,
+    biped: BipedGait,
 }
 
-/// Largest change of the desired velocity \[m/s^2\].
-const MAX_ACCEL: f64 = 1.5;
-
-/// Largest change of the requested head height that selects the form \[m/s\].
-const MAX_HEIGHT_RATE: f64 = 0.5;
-
-/// Bound of the integral foot-placement offset \[m\].
-const FOOT_BIAS_MAX: f64 = 0.15;
-
-/// Swing-foot clearance above the stance foot's that counts as touchdown \[m\].
-const TOUCHDOWN: f64 = 0.02;
-
-/// Time over which the target jump at a leg switch is faded out \[s\].
-const SWITCH_BLEND: f64 = 0.1;
-
-/// Gait quantities of the last step, for diagnostics.
 impl ModelBasedController {
     /// The layout this controller expects (the plamo-physics humanoid).
     pub const LAYOUT: ObservationLayout = ObservationLayout {
@@ -136,76 +40,19 @@ impl ModelBasedController {
     pub fn with_params(params: GaitParams, settings: ControllerSettings) -> Result<Self> {
         params.validate()?;
         settings.validate()?;
-        let joints = Joints::resolve();
-        let right_thigh = &BODIES[plamo_physics::humanoid::body_index("right_thigh").unwrap_or(9)];
-        let left_thigh = &BODIES[plamo_physics::humanoid::body_index("left_thigh").unwrap_or(12)];
-        let shin = &BODIES[plamo_physics::humanoid::body_index("right_shin").unwrap_or(10)];
-        let foot = &BODIES[FEET[0]];
-        let legs = LegGeometry {
-            thigh: -shin.offset[2],
-            shin: -foot.offset[2],
-        };
-        let masses = BODIES.map(|b| b.shapes.iter().map(shape_mass).sum::<f64>());
-        let total: f64 = masses.iter().sum();
         Ok(Self {
-            params,
-            settings,
-            mass_fraction: masses.map(|m| m / total),
-            hip_offset: [right_thigh.offset, left_thigh.offset],
-            hip_kp: JOINTS[joints.hip[0][1]].kp,
-            joints,
-            legs,
-            stance: 0,
-            phase: 0.0,
-            swing_start_rel_stance: [0.0; 3],
-            started: false,
-            last_wrench: RootWrench::default(),
-            last_targets: [0.0; NUM_JOINTS],
-            switch_offset: [0.0; NUM_JOINTS],
-            v_cmd: [0.0; 2],
-            foot_bias: 0.0,
-            h_cmd: 0.0,
+            biped: BipedGait::new(params, settings),
         })
     }
 
     /// The parameters in use.
     pub fn params(&self) -> &GaitParams {
-        &self.params
+        self.biped.params()
     }
 
     /// The residual wrench of the last action (world frame).
     pub fn last_wrench(&self) -> RootWrench {
-        self.last_wrench
-    }
-
-    /// Terrain height (relative to the ground under the root) at a heading-frame
-    /// point, from the nearest local height map sample.
-    fn ground_at(obs: &Observation, x: f64, y: f64) -> f64 {
-        let half = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
-        let r = (x / LOCAL_MAP_SPACING + half)
-            .round()
-            .clamp(0.0, (LOCAL_MAP_SIDE - 1) as f64);
-        let c = (y / LOCAL_MAP_SPACING + half)
-            .round()
-            .clamp(0.0, (LOCAL_MAP_SIDE - 1) as f64);
-        obs.height_map[r as usize * LOCAL_MAP_SIDE + c as usize]
-    }
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn clamp_norm(v: [f64; 3], max: f64) -> [f64; 3] {
-    let n = dot(v, v).sqrt();
-    if n > max && n > 0.0 {
-        v.map(|x| x * max / n)
-    } else {
-        v
+        self.biped.last_wrench()
     }
 }
 
@@ -218,259 +65,15 @@ impl Policy for ModelBasedController {
                 got: obs.layout().len(),
             });
         }
-        let j = self.joints;
-        // Pelvis frame axes in the heading frame.
-        let r = obs.root_rotation;
-        let fwd = [r[0], r[1], r[2]];
-        let left = [r[3], r[4], r[5]];
-        let up = [
-            fwd[1] * left[2] - fwd[2] * left[1],
-            fwd[2] * left[0] - fwd[0] * left[2],
-            fwd[0] * left[1] - fwd[1] * left[0],
-        ];
-        let pitch = (-fwd[2]).clamp(-1.0, 1.0).asin();
-        let roll = left[2].clamp(-1.0, 1.0).asin();
-        let [wx, wy, wz] = obs.root_ang_vel;
-        let [vx, vy, vz] = obs.root_lin_vel;
-
-        // What the plan asks for.
-        let wp0 = obs.waypoints[0];
-        let wp1 = obs.waypoints[1];
-        let speed = obs.waypoint_speeds[0].max(0.0);
-        let vmax = 1.15 * speed + 0.2;
-        let v_plan = clamp_norm(
-            [wp0[0] / WAYPOINT_SPACING, wp0[1] / WAYPOINT_SPACING, 0.0],
-            vmax,
-        );
-        // Rate-limited desired velocity: a start from rest accelerates step by step.
-        if !self.started {
-            self.v_cmd = [vx, vy];
-        }
-        let dv_max = MAX_ACCEL * CONTROL_DT;
-        for (c, p) in self.v_cmd.iter_mut().zip(v_plan) {
-            *c += (p - *c).clamp(-dv_max, dv_max);
-        }
-        let v_des = [self.v_cmd[0], self.v_cmd[1], 0.0];
-
-        let heading_err = if wp1[0].hypot(wp1[1]) > 0.2 {
-            wrap_angle(wp1[1].atan2(wp1[0]))
-        } else {
-            0.0
-        };
-        let head_above_ground = obs.root_height + obs.head_pos[2];
-        let head_des = head_above_ground + wp0[2];
-        // The form follows the requested height at a bounded rate: dropping into a
-        // crouch at once would let the body fall onto bent knees.
-        if !self.started {
-            self.h_cmd = head_above_ground;
-        }
-        let dh_max = MAX_HEIGHT_RATE * CONTROL_DT;
-        self.h_cmd += (head_des - self.h_cmd).clamp(-dh_max, dh_max);
-        let form = self.params.blend(self.h_cmd, speed);
-        let pitch_des = form.trunk_pitch + form.lean_per_speed * speed;
-        let pelvis_des = form.pelvis_height;
-        // Integral speed control: a walker that lags (the engines differ in how far a
-        // step carries) places its feet closer until the speed matches.
-        self.foot_bias = (self.foot_bias + form.speed_ki * (v_des[0] - vx) * CONTROL_DT)
-            .clamp(-FOOT_BIAS_MAX, FOOT_BIAS_MAX);
-
-        // Gait phase and touchdown-triggered leg switch.
-        let feet = [obs.body_pos[FEET[0]], obs.body_pos[FEET[1]]];
-        let swing = 1 - self.stance;
-        let mut switched = false;
-        if !self.started {
-            self.started = true;
-            // First swing: the foot on the side the body drifts towards stays down.
-            self.stance = if vy > 0.0 { 1 } else { 0 };
-            self.phase = 0.0;
-            let sw = 1 - self.stance;
-            self.swing_start_rel_stance = sub(feet[sw], feet[self.stance]);
-        } else {
-            self.phase += CONTROL_DT;
-            // Clearance relative to the stance foot's: the ankle's resting height
-            // differs by engine (contact softness) and by how the foot lands.
-            let clearance = |f: [f64; 3]| obs.root_height + f[2] - Self::ground_at(obs, f[0], f[1]);
-            let rest = clearance(feet[self.stance]).min(ANKLE_HEIGHT + 0.03);
-            let touchdown =
-                self.phase > 0.5 * form.step_time && clearance(feet[swing]) < rest + TOUCHDOWN;
-            if touchdown || self.phase > 1.5 * form.step_time {
-                self.stance = swing;
-                self.phase = 0.0;
-                switched = true;
-                self.swing_start_rel_stance = sub(feet[1 - self.stance], feet[self.stance]);
-            }
-        }
-        let stance = self.stance;
-        let swing = 1 - stance;
-        let side = |leg: usize| if leg == 0 { -1.0 } else { 1.0 };
-
-        // Swing foot target (heading frame, relative to the root).
-        // The PD servo lags a moving target by kd/kp: follow the path that far ahead.
-        let lead = JOINTS[j.hip[0][1]].kd / self.hip_kp;
-        let s_lin = ((self.phase + lead) / form.step_time).min(1.0);
-        let s = s_lin * s_lin * (3.0 - 2.0 * s_lin);
-        // Forward placement is measured from the centre of mass (body origins weighted
-        // by body mass): a leaning or crouching trunk carries it ahead of the pelvis.
-        let com_x: f64 = self
-            .mass_fraction
-            .iter()
-            .zip(&obs.body_pos)
-            .map(|(m, p)| m * p[0])
-            .sum();
-        let final_xy = [
-            com_x + form.foot_fwd_gain * vx + form.foot_err_gain * (vx - v_des[0]) - self.foot_bias,
-            side(swing) * form.foot_width
-                + form.foot_lat_gain * vy
-                + form.foot_err_gain * (vy - v_des[1]),
-        ];
-        let start = [
-            feet[stance][0] + self.swing_start_rel_stance[0],
-            feet[stance][1] + self.swing_start_rel_stance[1],
-        ];
-        let sx = start[0] + (final_xy[0] - start[0]) * s;
-        let sy = start[1] + (final_xy[1] - start[1]) * s;
-        let ground_swing =
-            Self::ground_at(obs, sx, sy).max(Self::ground_at(obs, final_xy[0], final_xy[1]));
-        let lift = if s_lin < 1.0 {
-            form.swing_height * (std::f64::consts::PI * s_lin).sin()
-        } else {
-            -0.02
-        };
-        let swing_target = [
-            sx,
-            sy,
-            -obs.root_height + ground_swing + ANKLE_HEIGHT + lift,
-        ];
-
-        // Stance foot target: where it is, with the pelvis at the desired height.
-        let st = feet[stance];
-        let ground_stance = Self::ground_at(obs, st[0], st[1]);
-        let stance_target = [
-            st[0] - form.stance_push * v_des[0],
-            st[1] - form.stance_push * v_des[1],
-            -pelvis_des + ground_stance + ANKLE_HEIGHT,
-        ];
-
-        let targets = &mut out.pd_targets;
-        targets.clear();
-        targets.resize(NUM_JOINTS, 0.0);
-        for (leg, target) in [(swing, swing_target), (stance, stance_target)] {
-            let o = self.hip_offset[leg];
-            let hip = [
-                fwd[0] * o[0] + left[0] * o[1] + up[0] * o[2],
-                fwd[1] * o[0] + left[1] * o[1] + up[1] * o[2],
-                fwd[2] * o[0] + left[2] * o[1] + up[2] * o[2],
-            ];
-            let rel = sub(target, hip);
-            let p = [dot(rel, fwd), dot(rel, left), dot(rel, up)];
-            let [hx_ik, hy_ik, knee] = leg_ik(&self.legs, p);
-            let (mut hx, mut hy, mut hz) = (hx_ik, hy_ik, 0.0);
-            if leg == stance {
-                // Virtual torso control through the stance hip's PD offset, plus the
-                // reaction of the swing hip's torque (SIMBICON: the stance hip takes
-                // -torso - swing torque).
-                let sw_torque = |axis: usize, target: f64| {
-                    let ji = j.hip[swing][axis];
-                    let jd = &JOINTS[ji];
-                    (jd.kp * (target - obs.joint_pos[ji]) - jd.kd * obs.joint_vel[ji])
-                        .clamp(-jd.max_torque, jd.max_torque)
-                };
-                let comp = form.swing_comp;
-                hy += (form.torso_kp * (pitch - pitch_des) + form.torso_kd * wy
-                    - comp * sw_torque(1, targets[j.hip[swing][1]]))
-                    / self.hip_kp;
-                hx += (form.torso_kp * roll + form.torso_kd * wx
-                    - comp * sw_torque(0, targets[j.hip[swing][0]]))
-                    / self.hip_kp;
-                hz = (-form.yaw_gain * heading_err).clamp(-0.4, 0.4);
-            }
-            targets[j.hip[leg][0]] = hx;
-            targets[j.hip[leg][1]] = hy;
-            targets[j.hip[leg][2]] = hz;
-            targets[j.knee[leg]] = knee;
-            targets[j.ankle[leg][0]] = -(pitch_des + hy_ik + knee);
-            targets[j.ankle[leg][1]] = -hx_ik;
-        }
-        // Cross-fade the legs' target jump at a switch.
-        let legs_joints = [j.hip[0], j.hip[1]]
-            .into_iter()
-            .flatten()
-            .chain(j.knee)
-            .chain(j.ankle[0])
-            .chain(j.ankle[1]);
-        let fade = (1.0 - self.phase / SWITCH_BLEND).max(0.0);
-        for ji in legs_joints {
-            if switched {
-                self.switch_offset[ji] = self.last_targets[ji] - targets[ji];
-            }
-            targets[ji] += fade * self.switch_offset[ji];
-            self.last_targets[ji] = targets[ji];
-        }
-        // Upper body: spine pitch from the form, head kept level, arms swinging.
-        targets[j.spine[1]] = form.spine_pitch;
-        targets[j.neck_y] = -(pitch_des + form.spine_pitch) * 0.8;
-        let swing_phase = if stance == 0 { 1.0 } else { -1.0 } * (2.0 * s - 1.0);
-        for arm in 0..2 {
-            targets[j.shoulder[arm][0]] = side(arm) * 0.15;
-            targets[j.shoulder[arm][1]] = side(arm) * form.arm_swing * swing_phase;
-            targets[j.elbow[arm]] = -0.4;
-        }
-
-        // Bounded residual root wrench, heading frame then world.
-        let m = self.settings.body_mass;
-        let g = &self.params.residual;
-        let force = clamp_norm(
-            [
-                m * g.vel_gain * (v_des[0] - vx),
-                m * g.vel_gain * (v_des[1] - vy),
-                (m * (g.height_gain * (pelvis_des - obs.root_height) - g.height_damping * vz))
-                    .max(0.0),
-            ],
-            self.settings.residual_force_cap * m * GRAVITY,
-        );
-        let torque = clamp_norm(
-            [
-                -(g.rot_gain * roll + g.rot_damping * wx),
-                -(g.rot_gain * (pitch - pitch_des) + g.rot_damping * wy),
-                g.rot_gain * 0.2 * heading_err - g.rot_damping * wz,
-            ],
-            self.settings.residual_torque_cap,
-        );
-        let wrench = RootWrench {
-            force: from_heading_frame(obs.heading, force),
-            torque: from_heading_frame(obs.heading, torque),
-        };
-        self.last_wrench = wrench;
-        out.root_wrench =
-            if self.settings.residual_force_cap > 0.0 || self.settings.residual_torque_cap > 0.0 {
-                Some(wrench)
-            } else {
-                None
-            };
+        self.biped.act(obs, out);
         Ok(())
     }
 
     fn reset(&mut self) {
-        self.started = false;
-        self.phase = 0.0;
-        self.switch_offset = [0.0; NUM_JOINTS];
-        self.foot_bias = 0.0;
+        self.biped.reset();
     }
 
     fn name(&self) -> &str {
         "model-based"
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn joints_resolve() {
-        let j = Joints::resolve();
-        assert_ne!(j.hip[0][1], j.hip[1][1]);
-        let c = ModelBasedController::new(ControllerSettings::default()).unwrap();
-        assert!((c.legs.thigh - 0.41).abs() < 0.05 && (c.legs.shin - 0.39).abs() < 0.05);
     }
 }
