@@ -1,12 +1,17 @@
 //! The model-based tracking controller, the default policy (no network needed).
 //!
 //! One gait per family of forms, chosen by the requested head height and speed:
-//! [`biped`] walks, runs and crouch-walks (its parameters blended continuously).
+//! [`biped`] walks, runs and crouch-walks (its parameters blended continuously);
+//! [`crawl`] goes down on hands and knees when the plan's head height drops below
+//! [`CrawlParams::crawl_below`] and stands up again above
+//! [`CrawlParams::stand_above`] (hysteresis), handing the biped a reset state.
 
 mod biped;
+mod crawl;
 mod ik;
 mod params;
 
+pub use crawl::{CRAWL_PARAMS_VERSION, CrawlParams, DEFAULT_CRAWL_PARAMS};
 pub use ik::{LegGeometry, leg_fk, leg_ik};
 pub use params::{DEFAULT_GAIT_PARAMS, FormParams, GAIT_PARAMS_VERSION, GaitParams, ResidualGains};
 
@@ -17,11 +22,15 @@ use crate::observation::{Observation, ObservationLayout};
 use crate::policy::{Action, Policy, RootWrench};
 use crate::settings::ControllerSettings;
 use biped::BipedGait;
+use crawl::CrawlGait;
 
 /// The model-based controller (see the module docs).
 #[derive(Debug, Clone)]
 pub struct ModelBasedController {
     biped: BipedGait,
+    crawl: CrawlGait,
+    /// Whether the crawl gait (including its get-down and get-up) is in charge.
+    crawling: bool,
 }
 
 impl ModelBasedController {
@@ -38,11 +47,33 @@ impl ModelBasedController {
 
     /// A controller with explicit parameters.
     pub fn with_params(params: GaitParams, settings: ControllerSettings) -> Result<Self> {
+        Self::with_all_params(params, CrawlParams::default(), settings)
+    }
+
+    /// A controller with explicit biped and crawl parameters.
+    pub fn with_all_params(
+        params: GaitParams,
+        crawl: CrawlParams,
+        settings: ControllerSettings,
+    ) -> Result<Self> {
         params.validate()?;
+        crawl.validate()?;
         settings.validate()?;
         Ok(Self {
+            crawl: CrawlGait::new(crawl, settings.clone()),
             biped: BipedGait::new(params, settings),
+            crawling: false,
         })
+    }
+
+    /// The crawl parameters in use.
+    pub fn crawl_params(&self) -> &CrawlParams {
+        self.crawl.params()
+    }
+
+    /// Whether the crawl gait is in charge (getting down, crawling or getting up).
+    pub fn is_crawling(&self) -> bool {
+        self.crawling
     }
 
     /// The parameters in use.
@@ -52,7 +83,11 @@ impl ModelBasedController {
 
     /// The residual wrench of the last action (world frame).
     pub fn last_wrench(&self) -> RootWrench {
-        self.biped.last_wrench()
+        if self.crawling {
+            self.crawl.last_wrench()
+        } else {
+            self.biped.last_wrench()
+        }
     }
 }
 
@@ -65,12 +100,37 @@ impl Policy for ModelBasedController {
                 got: obs.layout().len(),
             });
         }
-        self.biped.act(obs, out);
+        // The plan's head height above the ground under the root, 0.5 s ahead.
+        let requested = obs.root_height + obs.head_pos[2] + obs.waypoints[0][2];
+        let p = self.crawl.params();
+        let (below, above) = (p.crawl_below, p.stand_above);
+        if !self.crawling && requested < below {
+            self.crawling = true;
+            self.crawl.begin_down(obs);
+        } else if self.crawling {
+            if self.crawl.stood_up() {
+                self.crawling = false;
+                self.biped.reset();
+            } else if self.crawl.standing_up() {
+                if requested < below {
+                    self.crawl.begin_down(obs);
+                }
+            } else if requested > above {
+                self.crawl.begin_up(obs);
+            }
+        }
+        if self.crawling {
+            self.crawl.act(obs, out);
+        } else {
+            self.biped.act(obs, out);
+        }
         Ok(())
     }
 
     fn reset(&mut self) {
         self.biped.reset();
+        self.crawl.reset();
+        self.crawling = false;
     }
 
     fn name(&self) -> &str {

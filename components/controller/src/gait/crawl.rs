@@ -1,0 +1,864 @@
+//! The crawl gait of the model-based controller: hands and knees, head about 0.4 m
+//! (paper 4.2, the crawl form).
+//!
+//! - The posture is a desired body frame: pelvis at a height set by the thighs'
+//!   length (knees under the hips), pitched forward, the spine bent so the back is
+//!   level and the head low; every limb's joint targets come from IK between the
+//!   desired hip/shoulder and its contact point (knee or hand), so the four stiff PD
+//!   limbs hold the body like a table and the contacts carry it.
+//! - Each limb has a commanded contact point relative to its nominal one: on the
+//!   ground it moves back with the desired body velocity (plus the yaw rate times
+//!   its lever), in the air it moves from its lift-off point to half a stride ahead,
+//!   lifted over the local height map. Phase offsets and duty factor make the
+//!   sequence (a lateral-sequence walk keeps three limbs down).
+//! - The plan's next waypoint gives the desired velocity (rate-limited), its
+//!   direction the yaw rate; the cycle shortens with speed so strides stay short.
+//! - Terrain: each contact's height comes from the local height map; the desired
+//!   pelvis height follows the mean ground under the contacts.
+//! - Getting down and up are joint-space blends over a fixed time from the joint
+//!   angles at the switch to the crawl's (or standing) pose, with the residual
+//!   wrench holding height rate and attitude.
+//! - A bounded residual root wrench (capped by [`ControllerSettings`]) helps with
+//!   speed, height and attitude; it is reported like the biped's.
+
+use std::f64::consts::{FRAC_PI_2, PI};
+use std::path::{Path, PathBuf};
+
+use plamo_interfaces::CONTROL_DT;
+use plamo_physics::NUM_JOINTS;
+use plamo_physics::humanoid::{BODIES, body_index, joint_index};
+use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
+
+use crate::error::{ControllerError, Result};
+use crate::math::{from_heading_frame, wrap_angle};
+use crate::observation::{Observation, WAYPOINT_SPACING};
+use crate::policy::{Action, RootWrench};
+use crate::settings::{ControllerSettings, GRAVITY};
+
+/// Version of the crawl parameter file format.
+pub const CRAWL_PARAMS_VERSION: u32 = 1;
+
+/// The built-in crawl parameter file.
+pub const DEFAULT_CRAWL_PARAMS: &str = include_str!("../../params/crawl.toml");
+
+/// Crawl gait parameters (`params/crawl.toml`; units there and here).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CrawlParams {
+    /// File format version ([`CRAWL_PARAMS_VERSION`]).
+    pub version: u32,
+    /// Requested head height below which the controller crawls \[m\].
+    pub crawl_below: f64,
+    /// Requested head height above which a crawler stands up again \[m\].
+    pub stand_above: f64,
+    /// Pelvis pitch, forward positive \[rad\].
+    pub pelvis_pitch: f64,
+    /// Spine pitch on top of the pelvis' \[rad\].
+    pub spine_pitch: f64,
+    /// Neck pitch \[rad\].
+    pub neck_pitch: f64,
+    /// Knee contact ahead of the hip \[m\].
+    pub knee_fwd: f64,
+    /// Half the distance between the knees \[m\].
+    pub knee_width: f64,
+    /// Hand contact ahead of the shoulder \[m\].
+    pub hand_fwd: f64,
+    /// Half the distance between the hands \[m\].
+    pub hand_width: f64,
+    /// Depth the knee targets are pressed into the ground \[m\].
+    pub knee_press: f64,
+    /// Depth the hand targets are pressed into the ground \[m\].
+    pub hand_press: f64,
+    /// Shin pitch above level towards the foot \[rad\].
+    pub shin_lift: f64,
+    /// Contact height offset per rad of attitude error per m of lever \[-\].
+    pub attitude_gain: f64,
+    /// Contact height offset per m of pelvis height error \[-\].
+    pub height_gain_limbs: f64,
+    /// Gait cycle at rest \[s\].
+    pub cycle: f64,
+    /// Shortest gait cycle \[s\].
+    pub min_cycle: f64,
+    /// Longest stride of one limb \[m\].
+    pub max_stride: f64,
+    /// Fraction of the cycle a limb is on the ground \[-\].
+    pub duty: f64,
+    /// Phase offsets: right knee, left knee, right hand, left hand \[-\].
+    pub offsets: [f64; 4],
+    /// Swing lift of the knees \[m\].
+    pub knee_lift: f64,
+    /// Swing lift of the hands \[m\].
+    pub hand_lift: f64,
+    /// Desired yaw rate per rad of heading error \[1/s\].
+    pub yaw_gain: f64,
+    /// Largest desired yaw rate \[rad/s\].
+    pub max_yaw_rate: f64,
+    /// Largest change of the desired velocity \[m/s^2\].
+    pub max_accel: f64,
+    /// Highest crawl speed \[m/s\].
+    pub max_speed: f64,
+    /// Time to get down from standing \[s\].
+    pub down_time: f64,
+    /// Time to get up into standing \[s\].
+    pub up_time: f64,
+    /// Share of a transition's time spent reaching the squat \[-\].
+    pub squat_share: f64,
+    /// Squat hip pitch \[rad\].
+    pub squat_hip: f64,
+    /// Squat knee \[rad\].
+    pub squat_knee: f64,
+    /// Squat ankle pitch \[rad\].
+    pub squat_ankle: f64,
+    /// Squat spine pitch \[rad\].
+    pub squat_spine: f64,
+    /// Squat shoulder pitch \[rad\].
+    pub squat_shoulder: f64,
+    /// Squat elbow \[rad\].
+    pub squat_elbow: f64,
+    /// Residual force per m/s of velocity error, per kg \[1/s\].
+    pub vel_gain: f64,
+    /// Residual force per m of pelvis height error, per kg \[1/s^2\].
+    pub height_gain: f64,
+    /// Residual force per m/s of vertical velocity, per kg \[1/s\].
+    pub height_damping: f64,
+    /// Residual torque per rad of attitude error \[N m/rad\].
+    pub rot_gain: f64,
+    /// Residual torque per rad/s of angular velocity \[N m s/rad\].
+    pub rot_damping: f64,
+}
+
+impl Default for CrawlParams {
+    fn default() -> Self {
+        // The built-in file is tested to parse and validate.
+        Self::from_toml(DEFAULT_CRAWL_PARAMS, Path::new("<built-in crawl.toml>"))
+            .expect("built-in crawl parameters are valid")
+    }
+}
+
+impl CrawlParams {
+    /// Parses and validates parameters; `origin` names the source in errors.
+    pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
+        let p: CrawlParams = toml::from_str(text).map_err(|source| ControllerError::Toml {
+            path: origin.to_path_buf(),
+            source,
+        })?;
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// Reads a parameter file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|source| ControllerError::Io {
+            path: PathBuf::from(path),
+            source,
+        })?;
+        Self::from_toml(&text, path)
+    }
+
+    /// Checks the version and every field's range.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |field: &'static str, reason: String| {
+            Err(ControllerError::InvalidSettings { field, reason })
+        };
+        if self.version != CRAWL_PARAMS_VERSION {
+            return bad(
+                "version",
+                format!(
+                    "crawl parameter file version {} (this build reads {CRAWL_PARAMS_VERSION})",
+                    self.version
+                ),
+            );
+        }
+        let ranges: [(&'static str, f64, f64, f64); 36] = [
+            ("attitude_gain", self.attitude_gain, 0.0, 10.0),
+            ("height_gain_limbs", self.height_gain_limbs, 0.0, 10.0),
+            ("squat_share", self.squat_share, 0.05, 0.95),
+            ("squat_hip", self.squat_hip, -2.4, 0.6),
+            ("squat_knee", self.squat_knee, 0.0, 2.7),
+            ("squat_ankle", self.squat_ankle, -0.9, 0.9),
+            ("squat_spine", self.squat_spine, -0.5, 1.2),
+            ("squat_shoulder", self.squat_shoulder, -3.0, 1.0),
+            ("squat_elbow", self.squat_elbow, -2.6, 0.05),
+            ("crawl_below", self.crawl_below, 0.2, 1.2),
+            ("stand_above", self.stand_above, 0.2, 1.5),
+            ("pelvis_pitch", self.pelvis_pitch, -0.5, 1.5),
+            ("spine_pitch", self.spine_pitch, -0.5, 1.2),
+            ("neck_pitch", self.neck_pitch, -0.6, 0.9),
+            ("knee_fwd", self.knee_fwd, -0.3, 0.3),
+            ("knee_width", self.knee_width, 0.0, 0.3),
+            ("hand_fwd", self.hand_fwd, -0.3, 0.4),
+            ("hand_width", self.hand_width, 0.0, 0.4),
+            ("knee_press", self.knee_press, -0.05, 0.05),
+            ("hand_press", self.hand_press, -0.05, 0.05),
+            ("shin_lift", self.shin_lift, -0.5, 1.2),
+            ("cycle", self.cycle, 0.1, 5.0),
+            ("min_cycle", self.min_cycle, 0.1, 5.0),
+            ("max_stride", self.max_stride, 0.0, 0.6),
+            ("duty", self.duty, 0.3, 0.95),
+            ("knee_lift", self.knee_lift, 0.0, 0.3),
+            ("hand_lift", self.hand_lift, 0.0, 0.3),
+            ("yaw_gain", self.yaw_gain, 0.0, 10.0),
+            ("max_yaw_rate", self.max_yaw_rate, 0.0, 5.0),
+            ("max_accel", self.max_accel, 0.01, 20.0),
+            ("max_speed", self.max_speed, 0.0, 5.0),
+            ("down_time", self.down_time, 0.1, 10.0),
+            ("up_time", self.up_time, 0.1, 10.0),
+            ("vel_gain", self.vel_gain, 0.0, 50.0),
+            ("height_gain", self.height_gain, 0.0, 500.0),
+            ("rot_gain", self.rot_gain, 0.0, 5000.0),
+        ];
+        for (field, v, lo, hi) in ranges {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                return bad(field, format!("{v} is outside [{lo}, {hi}]"));
+            }
+        }
+        for (field, v) in [
+            ("height_damping", self.height_damping),
+            ("rot_damping", self.rot_damping),
+        ] {
+            if !(v.is_finite() && (0.0..=1000.0).contains(&v)) {
+                return bad(field, format!("{v} is outside [0, 1000]"));
+            }
+        }
+        if self.stand_above <= self.crawl_below {
+            return bad(
+                "stand_above",
+                format!(
+                    "{} must exceed crawl_below {} (hysteresis)",
+                    self.stand_above, self.crawl_below
+                ),
+            );
+        }
+        if self.min_cycle > self.cycle {
+            return bad(
+                "min_cycle",
+                format!("{} must not exceed cycle {}", self.min_cycle, self.cycle),
+            );
+        }
+        if self.offsets.iter().any(|o| !(0.0..1.0).contains(o)) {
+            return bad(
+                "offsets",
+                format!("{:?}: each must be in [0, 1)", self.offsets),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Limb order: right knee, left knee, right hand, left hand.
+const LIMBS: usize = 4;
+
+/// Radius of the shin capsule at the knee: the knee's height when on the ground \[m\].
+const KNEE_RADIUS: f64 = 0.055;
+
+/// Height of the hand sphere's centre above the ground when the hand is down \[m\].
+const HAND_RADIUS: f64 = 0.05;
+
+/// Ankle pitch target: toes pointed back along the shin as far as the joint goes
+/// \[rad\].
+const ANKLE_POINT: f64 = 0.9;
+
+/// Joint indices the crawl drives.
+#[derive(Debug, Clone, Copy)]
+struct Joints {
+    hip: [[usize; 3]; 2],
+    knee: [usize; 2],
+    ankle: [[usize; 2]; 2],
+    shoulder: [[usize; 3]; 2],
+    elbow: [usize; 2],
+    spine_y: usize,
+    neck_y: usize,
+}
+
+fn idx(name: &str) -> usize {
+    // Names below are the humanoid's own: checked by the unit test `geometry_resolves`.
+    joint_index(name).unwrap_or_else(|| panic!("humanoid has no joint `{name}`"))
+}
+
+fn body(name: &str) -> [f64; 3] {
+    BODIES[body_index(name).unwrap_or_else(|| panic!("humanoid has no body `{name}`"))].offset
+}
+
+impl Joints {
+    fn resolve() -> Self {
+        let side = ["right", "left"];
+        Joints {
+            hip: side.map(|s| ["x", "y", "z"].map(|a| idx(&format!("{s}_hip_{a}")))),
+            knee: side.map(|s| idx(&format!("{s}_knee"))),
+            ankle: side.map(|s| ["y", "x"].map(|a| idx(&format!("{s}_ankle_{a}")))),
+            shoulder: side.map(|s| ["x", "y", "z"].map(|a| idx(&format!("{s}_shoulder_{a}")))),
+            elbow: side.map(|s| idx(&format!("{s}_elbow"))),
+            spine_y: idx("spine_y"),
+            neck_y: idx("neck_y"),
+        }
+    }
+}
+
+/// Body dimensions the crawl's kinematics need (from the humanoid description).
+#[derive(Debug, Clone, Copy)]
+struct Geometry {
+    /// Hip anchors in the pelvis frame (right, left) \[m\].
+    hip: [[f64; 3]; 2],
+    /// Spine joint in the pelvis frame \[m\].
+    spine: [f64; 3],
+    /// Shoulder anchors in the torso frame (right, left) \[m\].
+    shoulder: [[f64; 3]; 2],
+    thigh: f64,
+    upper_arm: f64,
+    /// Elbow to the hand sphere's centre \[m\].
+    forearm: f64,
+}
+
+impl Geometry {
+    fn resolve() -> Self {
+        Geometry {
+            hip: [body("right_thigh"), body("left_thigh")],
+            spine: body("torso"),
+            shoulder: [body("right_upper_arm"), body("left_upper_arm")],
+            thigh: -body("right_shin")[2],
+            upper_arm: -body("right_lower_arm")[2],
+            forearm: -body("right_hand")[2] + HAND_RADIUS,
+        }
+    }
+}
+
+/// Rotation about Y by `a` applied to `v` (positive turns +Z towards +X).
+fn rot_y(a: f64, v: [f64; 3]) -> [f64; 3] {
+    let (s, c) = a.sin_cos();
+    [c * v[0] + s * v[2], v[1], -s * v[0] + c * v[2]]
+}
+
+fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn clamp_norm(v: [f64; 3], max: f64) -> [f64; 3] {
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    if n > max && n > 0.0 {
+        v.map(|x| x * max / n)
+    } else {
+        v
+    }
+}
+
+fn smoothstep(s: f64) -> f64 {
+    let s = s.clamp(0.0, 1.0);
+    s * s * (3.0 - 2.0 * s)
+}
+
+/// Hinge angles X, Y (and the bend of a second segment) that put the end of a limb
+/// hanging along -Z at `p` (parent frame, from the limb's anchor). `bend` is +1 for a
+/// knee-like joint (positive flexion), -1 for an elbow; `l2 = 0` aims one segment.
+/// Works for limbs pointing up in the parent frame too (an arm reaching forward
+/// from a pitched torso).
+fn limb_ik(l1: f64, l2: f64, bend: f64, p: [f64; 3]) -> [f64; 3] {
+    let qx = if p[2] <= 0.0 {
+        p[1].atan2(-p[2])
+    } else {
+        (-p[1]).atan2(p[2])
+    };
+    let (s, c) = qx.sin_cos();
+    // Undo the X hinge: the limb then lies in the X-Z plane.
+    let z = -s * p[1] + c * p[2];
+    let x = p[0];
+    let phi = (-x).atan2(-z);
+    if l2 == 0.0 {
+        return [qx, phi, 0.0];
+    }
+    let d = (x * x + z * z)
+        .sqrt()
+        .clamp((l1 - l2).abs() + 0.05, (l1 + l2) * 0.999);
+    let cos_bend = (l1 * l1 + l2 * l2 - d * d) / (2.0 * l1 * l2);
+    let bend_angle = PI - cos_bend.clamp(-1.0, 1.0).acos();
+    let cos_beta = (l1 * l1 + d * d - l2 * l2) / (2.0 * l1 * d);
+    let beta = cos_beta.clamp(-1.0, 1.0).acos();
+    [qx, phi - bend * beta, bend * bend_angle]
+}
+
+/// What the crawl is doing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Mode {
+    /// Blending from the joint angles at the switch into the crawl pose.
+    Down { t: f64, pitch0: f64, height0: f64 },
+    /// Crawling.
+    Crawl,
+    /// Blending from the crawl into standing.
+    Up { t: f64, pitch0: f64, height0: f64 },
+}
+
+/// The crawl's desired body frame, relative to the desired pelvis, heading frame.
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    pelvis_pitch: f64,
+    torso_pitch: f64,
+    hip: [[f64; 3]; 2],
+    shoulder: [[f64; 3]; 2],
+    /// Pelvis height above the ground under the root \[m\].
+    pelvis_height: f64,
+}
+
+/// The crawl gait (see the module docs).
+#[derive(Debug, Clone)]
+pub(crate) struct CrawlGait {
+    params: CrawlParams,
+    settings: ControllerSettings,
+    joints: Joints,
+    geo: Geometry,
+    mode: Mode,
+    /// Joint angles when the current transition began \[rad\].
+    from: [f64; NUM_JOINTS],
+    /// Gait cycle phase \[-\].
+    phase: f64,
+    /// Each limb's commanded contact relative to its nominal point (x, y) \[m\].
+    offset: [[f64; 2]; LIMBS],
+    /// Offset at lift-off \[m\].
+    lift_off: [[f64; 2]; LIMBS],
+    in_swing: [bool; LIMBS],
+    /// Rate-limited desired velocity, heading frame \[m/s\].
+    v_cmd: [f64; 2],
+    last_wrench: RootWrench,
+}
+
+/// Standing pose the get-up blends into \[rad\] (hip, knee, ankle pitch).
+const STAND: [f64; 3] = [-0.1, 0.2, -0.1];
+
+impl CrawlGait {
+    /// A crawl with validated parameters and settings.
+    pub(crate) fn new(params: CrawlParams, settings: ControllerSettings) -> Self {
+        Self {
+            params,
+            settings,
+            joints: Joints::resolve(),
+            geo: Geometry::resolve(),
+            mode: Mode::Crawl,
+            from: [0.0; NUM_JOINTS],
+            phase: 0.0,
+            offset: [[0.0; 2]; LIMBS],
+            lift_off: [[0.0; 2]; LIMBS],
+            in_swing: [false; LIMBS],
+            v_cmd: [0.0; 2],
+            last_wrench: RootWrench::default(),
+        }
+    }
+
+    pub(crate) fn params(&self) -> &CrawlParams {
+        &self.params
+    }
+
+    pub(crate) fn last_wrench(&self) -> RootWrench {
+        self.last_wrench
+    }
+
+    /// Whether the get-up has finished (the biped gait takes over).
+    pub(crate) fn stood_up(&self) -> bool {
+        matches!(self.mode, Mode::Up { t, .. } if t >= self.params.up_time)
+    }
+
+    /// Whether the crawl is standing up.
+    pub(crate) fn standing_up(&self) -> bool {
+        matches!(self.mode, Mode::Up { .. })
+    }
+
+    /// Starts getting down from whatever pose `obs` shows.
+    pub(crate) fn begin_down(&mut self, obs: &Observation) {
+        self.from.copy_from_slice(&obs.joint_pos);
+        self.mode = Mode::Down {
+            t: 0.0,
+            pitch0: Self::pitch(obs),
+            height0: obs.root_height,
+        };
+        self.phase = 0.0;
+        self.offset = [[0.0; 2]; LIMBS];
+        self.in_swing = [false; LIMBS];
+        self.v_cmd = [obs.root_lin_vel[0], obs.root_lin_vel[1]];
+    }
+
+    /// Starts standing up.
+    pub(crate) fn begin_up(&mut self, obs: &Observation) {
+        self.from.copy_from_slice(&obs.joint_pos);
+        self.mode = Mode::Up {
+            t: 0.0,
+            pitch0: Self::pitch(obs),
+            height0: obs.root_height,
+        };
+    }
+
+    fn pitch(obs: &Observation) -> f64 {
+        (-obs.root_rotation[2]).clamp(-1.0, 1.0).asin()
+    }
+
+    /// Terrain height (relative to the ground under the root) at a heading-frame
+    /// point, bilinear in the local height map.
+    fn ground_at(obs: &Observation, x: f64, y: f64) -> f64 {
+        let half = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
+        let last = (LOCAL_MAP_SIDE - 1) as f64;
+        let r = (x / LOCAL_MAP_SPACING + half).clamp(0.0, last);
+        let c = (y / LOCAL_MAP_SPACING + half).clamp(0.0, last);
+        let (r0, c0) = (r.floor().min(last - 1.0), c.floor().min(last - 1.0));
+        let (fr, fc) = (r - r0, c - c0);
+        let h = |i: f64, j: f64| obs.height_map[i as usize * LOCAL_MAP_SIDE + j as usize];
+        (1.0 - fr) * ((1.0 - fc) * h(r0, c0) + fc * h(r0, c0 + 1.0))
+            + fr * ((1.0 - fc) * h(r0 + 1.0, c0) + fc * h(r0 + 1.0, c0 + 1.0))
+    }
+
+    /// The desired body frame for a pelvis pitch.
+    fn frame(&self, obs: &Observation) -> Frame {
+        let p = &self.params;
+        let g = &self.geo;
+        let pelvis_pitch = p.pelvis_pitch;
+        let torso_pitch = pelvis_pitch + p.spine_pitch;
+        let hip = g.hip.map(|h| rot_y(pelvis_pitch, h));
+        let spine = rot_y(pelvis_pitch, g.spine);
+        let shoulder = g.shoulder.map(|s| add(spine, rot_y(torso_pitch, s)));
+        // Knees under the hips: the thigh's length sets the hip height.
+        let hip_height = KNEE_RADIUS - p.knee_press
+            + (g.thigh * g.thigh - p.knee_fwd * p.knee_fwd)
+                .max(0.01)
+                .sqrt();
+        // Ground under the nominal contacts: on a slope or a step the body follows it.
+        let mut ground = 0.0;
+        for (side, h) in hip.iter().enumerate() {
+            ground += Self::ground_at(obs, h[0] + p.knee_fwd, h[1]);
+            let s = shoulder[side];
+            ground += Self::ground_at(obs, s[0] + p.hand_fwd, s[1]);
+        }
+        Frame {
+            pelvis_pitch,
+            torso_pitch,
+            hip,
+            shoulder,
+            pelvis_height: ground / 4.0 + hip_height - hip[0][2],
+        }
+    }
+
+    /// Nominal contact points (x, y), heading frame relative to the pelvis.
+    fn nominal(&self, f: &Frame) -> [[f64; 2]; LIMBS] {
+        let p = &self.params;
+        let side = |i: usize| if i == 0 { -1.0 } else { 1.0 };
+        [
+            [f.hip[0][0] + p.knee_fwd, side(0) * p.knee_width],
+            [f.hip[1][0] + p.knee_fwd, side(1) * p.knee_width],
+            [f.shoulder[0][0] + p.hand_fwd, side(0) * p.hand_width],
+            [f.shoulder[1][0] + p.hand_fwd, side(1) * p.hand_width],
+        ]
+    }
+
+    /// Joint targets with the contacts at `contacts` (heading frame, relative to the
+    /// desired pelvis; z absolute relative to the ground under the root).
+    fn pose_targets(&self, f: &Frame, contacts: &[[f64; 3]; LIMBS], targets: &mut [f64]) {
+        let j = &self.joints;
+        let g = &self.geo;
+        let p = &self.params;
+        for leg in 0..2 {
+            let knee = contacts[leg];
+            let rel = sub([knee[0], knee[1], knee[2] - f.pelvis_height], f.hip[leg]);
+            let q = limb_ik(g.thigh, 0.0, 1.0, rot_y(-f.pelvis_pitch, rel));
+            // Shin back along the ground, its foot end lifted by `shin_lift`.
+            let thigh_pitch = f.pelvis_pitch + q[1];
+            targets[j.hip[leg][0]] = q[0];
+            targets[j.hip[leg][1]] = q[1];
+            targets[j.hip[leg][2]] = 0.0;
+            targets[j.knee[leg]] = FRAC_PI_2 - p.shin_lift - thigh_pitch;
+            targets[j.ankle[leg][0]] = ANKLE_POINT;
+            targets[j.ankle[leg][1]] = 0.0;
+        }
+        for arm in 0..2 {
+            let hand = contacts[2 + arm];
+            let rel = sub(
+                [hand[0], hand[1], hand[2] - f.pelvis_height],
+                f.shoulder[arm],
+            );
+            let q = limb_ik(g.upper_arm, g.forearm, -1.0, rot_y(-f.torso_pitch, rel));
+            targets[j.shoulder[arm][0]] = q[0];
+            targets[j.shoulder[arm][1]] = q[1];
+            targets[j.shoulder[arm][2]] = 0.0;
+            targets[j.elbow[arm]] = q[2];
+        }
+        targets[j.spine_y] = p.spine_pitch;
+        targets[j.neck_y] = p.neck_pitch;
+    }
+
+    /// The squat both transitions pass through.
+    fn squat(&self) -> [f64; NUM_JOINTS] {
+        let (p, j) = (&self.params, &self.joints);
+        let mut q = [0.0; NUM_JOINTS];
+        for side in 0..2 {
+            q[j.hip[side][1]] = p.squat_hip;
+            q[j.knee[side]] = p.squat_knee;
+            q[j.ankle[side][0]] = p.squat_ankle;
+            q[j.shoulder[side][1]] = p.squat_shoulder;
+            q[j.elbow[side]] = p.squat_elbow;
+        }
+        q[j.spine_y] = p.squat_spine;
+        q
+    }
+
+    /// Joint targets `from` -> squat -> `to` at time share `u` in [0, 1].
+    fn through_squat(
+        &self,
+        from: &[f64; NUM_JOINTS],
+        to: &[f64; NUM_JOINTS],
+        u: f64,
+        out: &mut [f64],
+    ) {
+        let squat = self.squat();
+        let share = self.params.squat_share;
+        let (a, b, s) = if u < share {
+            (from, &squat, smoothstep(u / share))
+        } else {
+            (&squat, to, smoothstep((u - share) / (1.0 - share)))
+        };
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = a[i] + s * (b[i] - a[i]);
+        }
+    }
+
+    /// Contact heights on the ground (pressed in), for (x, y) points.
+    fn grounded(&self, obs: &Observation, xy: &[[f64; 2]; LIMBS]) -> [[f64; 3]; LIMBS] {
+        let p = &self.params;
+        std::array::from_fn(|i| {
+            let [x, y] = xy[i];
+            let rest = if i < 2 {
+                KNEE_RADIUS - p.knee_press
+            } else {
+                HAND_RADIUS - p.hand_press
+            };
+            [x, y, Self::ground_at(obs, x, y) + rest]
+        })
+    }
+
+    /// PD targets and residual wrench for one control step (layout checked by the
+    /// caller).
+    pub(crate) fn act(&mut self, obs: &Observation, out: &mut Action) {
+        let p = self.params;
+        let r = obs.root_rotation;
+        let pitch = Self::pitch(obs);
+        let roll = r[5].clamp(-1.0, 1.0).asin();
+        let [wx, wy, wz] = obs.root_ang_vel;
+        let [vx, vy, vz] = obs.root_lin_vel;
+
+        // What the plan asks for.
+        let wp0 = obs.waypoints[0];
+        let wp1 = obs.waypoints[1];
+        let vmax = (1.15 * obs.waypoint_speeds[0].max(0.0) + 0.2).min(p.max_speed);
+        let mut v_plan = [wp0[0] / WAYPOINT_SPACING, wp0[1] / WAYPOINT_SPACING];
+        let n = v_plan[0].hypot(v_plan[1]);
+        if n > vmax {
+            v_plan = v_plan.map(|v| v * vmax / n);
+        }
+        let heading_err = if wp1[0].hypot(wp1[1]) > 0.2 {
+            wrap_angle(wp1[1].atan2(wp1[0]))
+        } else {
+            0.0
+        };
+        let f = self.frame(obs);
+        let nominal = self.nominal(&f);
+
+        let targets = &mut out.pd_targets;
+        targets.clear();
+        targets.resize(NUM_JOINTS, 0.0);
+        let (v_des, pitch_des, height_des, yaw_rate) = match self.mode {
+            Mode::Down { t, pitch0, height0 } => {
+                let s = smoothstep(t / p.down_time);
+                let mut crawl = [0.0; NUM_JOINTS];
+                let contacts = self.grounded(obs, &nominal);
+                self.pose_targets(&f, &contacts, &mut crawl);
+                self.through_squat(&self.from, &crawl, t / p.down_time, targets);
+                let t = t + CONTROL_DT;
+                self.mode = if t >= p.down_time {
+                    Mode::Crawl
+                } else {
+                    Mode::Down { t, pitch0, height0 }
+                };
+                (
+                    [0.0; 2],
+                    pitch0 + s * (f.pelvis_pitch - pitch0),
+                    height0 + s * (f.pelvis_height - height0),
+                    0.0,
+                )
+            }
+            Mode::Up { t, pitch0, height0 } => {
+                let s = smoothstep(t / p.up_time);
+                let j = &self.joints;
+                let mut stand = [0.0; NUM_JOINTS];
+                for leg in 0..2 {
+                    stand[j.hip[leg][1]] = STAND[0];
+                    stand[j.knee[leg]] = STAND[1];
+                    stand[j.ankle[leg][0]] = STAND[2];
+                }
+                self.through_squat(&self.from, &stand, t / p.up_time, targets);
+                self.mode = Mode::Up {
+                    t: t + CONTROL_DT,
+                    pitch0,
+                    height0,
+                };
+                let stand_height = plamo_physics::humanoid::STANDING_PELVIS_HEIGHT - 0.02;
+                (
+                    [0.0; 2],
+                    pitch0 * (1.0 - s),
+                    height0 + s * (stand_height - height0),
+                    0.0,
+                )
+            }
+            Mode::Crawl => {
+                let dv = p.max_accel * CONTROL_DT;
+                for (c, want) in self.v_cmd.iter_mut().zip(v_plan) {
+                    *c += (want - *c).clamp(-dv, dv);
+                }
+                let yaw_rate = (p.yaw_gain * heading_err).clamp(-p.max_yaw_rate, p.max_yaw_rate);
+                let speed = self.v_cmd[0].hypot(self.v_cmd[1]);
+                let cycle = (p.max_stride / (speed * p.duty).max(1e-6)).clamp(p.min_cycle, p.cycle);
+                self.phase = (self.phase + CONTROL_DT / cycle).fract();
+                let stance_time = cycle * p.duty;
+                let mut xy = [[0.0; 2]; LIMBS];
+                let mut lift = [0.0; LIMBS];
+                for i in 0..LIMBS {
+                    let local = (self.phase - p.offsets[i]).rem_euclid(1.0);
+                    // Contact velocity relative to the body: -(v + w x r).
+                    let [nx, ny] = nominal[i];
+                    let vel = [self.v_cmd[0] - yaw_rate * ny, self.v_cmd[1] + yaw_rate * nx];
+                    if local < p.duty {
+                        self.in_swing[i] = false;
+                        for k in 0..2 {
+                            self.offset[i][k] -= vel[k] * CONTROL_DT;
+                        }
+                    } else {
+                        if !self.in_swing[i] {
+                            self.in_swing[i] = true;
+                            self.lift_off[i] = self.offset[i];
+                        }
+                        let s_lin = ((local - p.duty) / (1.0 - p.duty)).min(1.0);
+                        let s = smoothstep(s_lin + CONTROL_DT / (cycle * (1.0 - p.duty)));
+                        for k in 0..2 {
+                            let land = 0.5 * vel[k] * stance_time;
+                            self.offset[i][k] =
+                                self.lift_off[i][k] + s * (land - self.lift_off[i][k]);
+                        }
+                        let h = if i < 2 { p.knee_lift } else { p.hand_lift };
+                        lift[i] = h * (PI * s_lin).sin();
+                    }
+                    for k in 0..2 {
+                        self.offset[i][k] = self.offset[i][k].clamp(-p.max_stride, p.max_stride);
+                    }
+                    xy[i] = [nx + self.offset[i][0], ny + self.offset[i][1]];
+                }
+                let mut contacts = self.grounded(obs, &xy);
+                for i in 0..LIMBS {
+                    if lift[i] > 0.0 {
+                        // Clear the highest ground between lift-off and landing.
+                        let [x0, y0] = [
+                            nominal[i][0] + self.lift_off[i][0],
+                            nominal[i][1] + self.lift_off[i][1],
+                        ];
+                        let over = Self::ground_at(obs, x0, y0)
+                            .max(contacts[i][2] - if i < 2 { KNEE_RADIUS } else { HAND_RADIUS });
+                        contacts[i][2] = contacts[i][2].max(over) + lift[i];
+                    }
+                }
+                // Stance limbs straighten what sags: lower a contact target (relative
+                // to the body) where the body is low.
+                let pitch_err = pitch - f.pelvis_pitch;
+                let height_err = f.pelvis_height - obs.root_height;
+                for (c, n) in contacts.iter_mut().zip(&nominal) {
+                    c[2] += p.attitude_gain * (roll * n[1] - pitch_err * n[0])
+                        - p.height_gain_limbs * height_err;
+                }
+                self.pose_targets(&f, &contacts, targets);
+                (self.v_cmd, f.pelvis_pitch, f.pelvis_height, yaw_rate)
+            }
+        };
+
+        // Bounded residual root wrench, heading frame then world.
+        let m = self.settings.body_mass;
+        let force = clamp_norm(
+            [
+                m * p.vel_gain * (v_des[0] - vx),
+                m * p.vel_gain * (v_des[1] - vy),
+                (m * (p.height_gain * (height_des - obs.root_height) - p.height_damping * vz))
+                    .max(0.0),
+            ],
+            self.settings.residual_force_cap * m * GRAVITY,
+        );
+        let torque = clamp_norm(
+            [
+                -(p.rot_gain * roll + p.rot_damping * wx),
+                -(p.rot_gain * (pitch - pitch_des) + p.rot_damping * wy),
+                p.rot_damping * (yaw_rate - wz),
+            ],
+            self.settings.residual_torque_cap,
+        );
+        let wrench = RootWrench {
+            force: from_heading_frame(obs.heading, force),
+            torque: from_heading_frame(obs.heading, torque),
+        };
+        self.last_wrench = wrench;
+        out.root_wrench =
+            if self.settings.residual_force_cap > 0.0 || self.settings.residual_torque_cap > 0.0 {
+                Some(wrench)
+            } else {
+                None
+            };
+    }
+
+    /// Back to crawling from rest (used when the controller is reset).
+    pub(crate) fn reset(&mut self) {
+        self.mode = Mode::Crawl;
+        self.phase = 0.0;
+        self.offset = [[0.0; 2]; LIMBS];
+        self.in_swing = [false; LIMBS];
+        self.v_cmd = [0.0; 2];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn built_in_parameters_validate_and_bad_ones_name_the_field() {
+        let p = CrawlParams::default();
+        p.validate().unwrap();
+        let bad = CrawlParams { duty: 1.5, ..p };
+        match bad.validate() {
+            Err(ControllerError::InvalidSettings { field, .. }) => assert_eq!(field, "duty"),
+            other => panic!("{other:?}"),
+        }
+        let bad = CrawlParams {
+            stand_above: p.crawl_below,
+            ..p
+        };
+        assert!(bad.validate().is_err());
+        let text = DEFAULT_CRAWL_PARAMS.replace("duty", "dutty");
+        assert!(CrawlParams::from_toml(&text, Path::new("x")).is_err());
+    }
+
+    #[test]
+    fn geometry_resolves() {
+        let g = Geometry::resolve();
+        assert!((g.thigh - 0.41).abs() < 1e-9 && (g.upper_arm - 0.28).abs() < 1e-9);
+        let j = Joints::resolve();
+        assert_ne!(j.shoulder[0][1], j.shoulder[1][1]);
+    }
+
+    #[test]
+    fn limb_ik_reaches_targets_up_and_down() {
+        let (l1, l2) = (0.28, 0.29);
+        for bend in [1.0, -1.0] {
+            for p in [[0.1, 0.05, -0.4], [0.4, -0.05, 0.15], [-0.2, 0.1, -0.3]] {
+                let [qx, qy, b] = limb_ik(l1, l2, bend, p);
+                // Forward kinematics: Rx(qx) [Ry(qy)(0,0,-l1) + Ry(qy+b)(0,0,-l2)].
+                let x = -l1 * qy.sin() - l2 * (qy + b).sin();
+                let z = -l1 * qy.cos() - l2 * (qy + b).cos();
+                let back = [x, -z * qx.sin(), z * qx.cos()];
+                for k in 0..3 {
+                    assert!((back[k] - p[k]).abs() < 1e-9, "{p:?} -> {back:?}");
+                }
+                assert!(bend * b > 0.0);
+            }
+        }
+    }
+}
