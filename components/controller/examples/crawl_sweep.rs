@@ -117,13 +117,30 @@ fn trace(
     let mut policy =
         ModelBasedController::with_all_params(GaitParams::default(), crawl, settings.clone())?;
     let scene = flat_scene(speed * duration + 10.0);
-    let path = StraightPath {
-        start: [0.0, 0.0],
-        speed,
-        head_height: head,
+    // Start offsets as in the sweep's run `PLAMO_TRACE_RUN` (default 0).
+    let r: usize = std::env::var("PLAMO_TRACE_RUN")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
+    let start = [0.37 * r as f64, 0.1 * (r % 3) as f64 - 0.1];
+    let path = UpDownPath {
+        line: StraightPath {
+            start,
+            speed,
+            head_height: head,
+        },
+        up_at: std::env::var("PLAMO_TRACE_UP_AT")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(f64::INFINITY),
     };
     let mut physics = create_backend(engine, &scene, &PhysicsSettings::default())?;
-    physics.reset(&HumanoidPose::standing_on(&scene.terrain, 0.0, 0.0, 0.0))?;
+    physics.reset(&HumanoidPose::standing_on(
+        &scene.terrain,
+        start[0],
+        start[1],
+        0.0,
+    ))?;
     let mut obs = Observation::new(ModelBasedController::LAYOUT);
     let mut action = Action::zeros(ModelBasedController::LAYOUT.num_joints);
     let mut plan = [Waypoint::default(); NUM_WAYPOINTS];
@@ -132,16 +149,56 @@ fn trace(
         let t = c as f64 / 30.0;
         let state = physics.state().clone();
         for (i, w) in plan.iter_mut().enumerate() {
-            *w = path.at(&scene, t + WAYPOINT_SPACING * (i + 1) as f64);
+            *w = path.point(&scene, t + WAYPOINT_SPACING * (i + 1) as f64);
         }
         obs.update(&HumanoidSnapshot::from(&state), &plan, &scene)?;
         policy.act(&obs, &mut action)?;
-        if c % 8 == 0 {
+        if c % 8 == 0 && std::env::var_os("PLAMO_TRACE_COM").is_some() {
+            use plamo_physics::humanoid::{BODIES, shape_mass};
+            let m: Vec<f64> = BODIES
+                .iter()
+                .map(|b| b.shapes.iter().map(shape_mass).sum())
+                .collect();
+            let total: f64 = m.iter().sum();
+            let com: f64 = obs
+                .body_pos
+                .iter()
+                .zip(&m)
+                .map(|(p, m)| p[0] * m)
+                .sum::<f64>()
+                / total;
+            let x = |i: usize| obs.body_pos[i][0];
+            let q = &obs.joint_pos;
+            let tg = &action.pd_targets;
+            println!(
+                "  right arm q {:5.2} {:5.2} {:5.2} target {:5.2} {:5.2} {:5.2} spine {:5.2}/{:5.2} hip_y {:5.2}/{:5.2} knee {:5.2}/{:5.2}",
+                q[6], q[7], q[9], tg[6], tg[7], tg[9], q[1], tg[1], q[15], tg[15], q[17], tg[17]
+            );
+            println!(
+                "  com x {com:5.2} knees {:5.2} {:5.2} hands {:5.2} {:5.2} feet {:5.2} {:5.2} pelvis-head {:5.2} ankle {:5.2}/{:5.2}",
+                x(10),
+                x(13),
+                x(5),
+                x(8),
+                x(11),
+                x(14),
+                obs.head_pos[0],
+                q[18],
+                tg[18]
+            );
+        }
+        if c % std::env::var("PLAMO_TRACE_EVERY")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(8)
+            == 0
+        {
             let b = &state.body_pos;
             let w = policy.last_wrench();
             println!(
-                "{engine:?} t {t:5.2} head {:5.2} {:5.2} pelvis z {:4.2} pitch {:5.2} roll {:5.2} knees {:4.2} {:4.2} hands {:4.2} {:4.2} feet {:4.2} {:4.2} F {:5.0} {:5.0} {:5.0} T {:4.0} {:4.0} {:4.0} crawl {}",
-                state.head[0] - path.at(&scene, t).x,
+                "{engine:?} t {t:5.2} head {:5.2} {:5.2} {:5.2} pelvis z {:4.2} pitch {:5.2} roll {:5.2} knees {:4.2} {:4.2} hands {:4.2} {:4.2} feet {:4.2} {:4.2} F {:5.0} {:5.0} {:5.0} T {:4.0} {:4.0} {:4.0} crawl {}",
+                state.head[0] - path.point(&scene, t).x,
+                state.head[1] - path.point(&scene, t).y,
                 state.head[2],
                 state.root_position[2],
                 (-obs.root_rotation[2]).asin(),
@@ -171,4 +228,26 @@ fn trace(
         physics.step_n(4)?;
     }
     Ok(())
+}
+
+/// A straight path whose head height rises to standing (1.47 m) at `up_at` \[s\].
+struct UpDownPath {
+    line: StraightPath,
+    up_at: f64,
+}
+
+impl HeadPath for UpDownPath {
+    fn point(&self, scene: &plamo_scenes::Scene, t: f64) -> plamo_controller::Waypoint {
+        let mut w = self.line.at(scene, t);
+        if t >= self.up_at {
+            w.z += 1.47 - self.line.head_height;
+        }
+        w
+    }
+    fn direction(&self, _t: f64) -> [f64; 2] {
+        [1.0, 0.0]
+    }
+    fn head_height(&self) -> f64 {
+        self.line.head_height
+    }
 }

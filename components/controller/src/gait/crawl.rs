@@ -26,7 +26,7 @@ use std::path::{Path, PathBuf};
 
 use plamo_interfaces::CONTROL_DT;
 use plamo_physics::NUM_JOINTS;
-use plamo_physics::humanoid::{BODIES, body_index, joint_index};
+use plamo_physics::humanoid::{BODIES, JOINTS, body_index, joint_index};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
 use crate::error::{ControllerError, Result};
@@ -75,6 +75,9 @@ pub struct CrawlParams {
     pub attitude_gain: f64,
     /// Contact height offset per m of pelvis height error \[-\].
     pub height_gain_limbs: f64,
+    /// Share of the body weight the hands carry, for the arms' gravity feed-forward
+    /// \[-\].
+    pub hand_load: f64,
     /// Gait cycle at rest \[s\].
     pub cycle: f64,
     /// Shortest gait cycle \[s\].
@@ -101,6 +104,9 @@ pub struct CrawlParams {
     pub down_time: f64,
     /// Time to get up into standing \[s\].
     pub up_time: f64,
+    /// Backward speed the residual asks for while sitting back into the squat on the
+    /// way up \[m/s\].
+    pub sit_back_speed: f64,
     /// Share of a transition's time spent reaching the squat \[-\].
     pub squat_share: f64,
     /// Squat hip pitch \[rad\].
@@ -169,7 +175,9 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 36] = [
+        let ranges: [(&'static str, f64, f64, f64); 38] = [
+            ("sit_back_speed", self.sit_back_speed, 0.0, 2.0),
+            ("hand_load", self.hand_load, 0.0, 1.0),
             ("attitude_gain", self.attitude_gain, 0.0, 10.0),
             ("height_gain_limbs", self.height_gain_limbs, 0.0, 10.0),
             ("squat_share", self.squat_share, 0.05, 0.95),
@@ -189,7 +197,7 @@ impl CrawlParams {
             ("hand_fwd", self.hand_fwd, -0.3, 0.4),
             ("hand_width", self.hand_width, 0.0, 0.4),
             ("knee_press", self.knee_press, -0.05, 0.05),
-            ("hand_press", self.hand_press, -0.05, 0.05),
+            ("hand_press", self.hand_press, -0.05, 0.2),
             ("shin_lift", self.shin_lift, -0.5, 1.2),
             ("cycle", self.cycle, 0.1, 5.0),
             ("min_cycle", self.min_cycle, 0.1, 5.0),
@@ -350,19 +358,25 @@ fn smoothstep(s: f64) -> f64 {
     s * s * (3.0 - 2.0 * s)
 }
 
+/// Smallest lever of the X hinge \[m\]: a limb pointing along its parent's X axis
+/// is a gimbal lock of the X-then-Y hinges, where the exact X angle jumps; below this
+/// lever the X hinge gives up some of the sideways reach instead.
+const GIMBAL_LEVER: f64 = 0.15;
+
 /// Hinge angles X, Y (and the bend of a second segment) that put the end of a limb
 /// hanging along -Z at `p` (parent frame, from the limb's anchor). `bend` is +1 for a
 /// knee-like joint (positive flexion), -1 for an elbow; `l2 = 0` aims one segment.
-/// Works for limbs pointing up in the parent frame too (an arm reaching forward
-/// from a pitched torso).
-fn limb_ik(l1: f64, l2: f64, bend: f64, p: [f64; 3]) -> [f64; 3] {
-    let qx = if p[2] <= 0.0 {
-        p[1].atan2(-p[2])
+/// `up` picks the solution with the limb pointing up in the parent frame (hip/shoulder
+/// Y beyond 90 degrees: an arm reaching down from a torso pitched past level); the
+/// caller picks it once per posture so the solution does not flip between steps.
+fn limb_ik(l1: f64, l2: f64, bend: f64, up: bool, p: [f64; 3]) -> [f64; 3] {
+    let qx = if up {
+        (-p[1]).atan2(p[2].max(GIMBAL_LEVER))
     } else {
-        (-p[1]).atan2(p[2])
+        p[1].atan2((-p[2]).max(GIMBAL_LEVER))
     };
     let (s, c) = qx.sin_cos();
-    // Undo the X hinge: the limb then lies in the X-Z plane.
+    // Undo the X hinge: the limb then lies (nearly) in the X-Z plane.
     let z = -s * p[1] + c * p[2];
     let x = p[0];
     let phi = (-x).atan2(-z);
@@ -399,6 +413,8 @@ struct Frame {
     shoulder: [[f64; 3]; 2],
     /// Pelvis height above the ground under the root \[m\].
     pelvis_height: f64,
+    /// Whether the arms point up in the torso frame (see [`limb_ik`]).
+    arm_up: bool,
 }
 
 /// The crawl gait (see the module docs).
@@ -526,12 +542,20 @@ impl CrawlGait {
             let s = shoulder[side];
             ground += Self::ground_at(obs, s[0] + p.hand_fwd, s[1]);
         }
+        let pelvis_height = ground / 4.0 + hip_height - hip[0][2];
+        // The nominal hand seen from the torso decides the arm's IK branch.
+        let hand = [
+            p.hand_fwd,
+            0.0,
+            HAND_RADIUS - pelvis_height - shoulder[0][2],
+        ];
         Frame {
             pelvis_pitch,
             torso_pitch,
             hip,
             shoulder,
-            pelvis_height: ground / 4.0 + hip_height - hip[0][2],
+            pelvis_height,
+            arm_up: rot_y(-torso_pitch, hand)[2] > 0.0,
         }
     }
 
@@ -549,14 +573,20 @@ impl CrawlGait {
 
     /// Joint targets with the contacts at `contacts` (heading frame, relative to the
     /// desired pelvis; z absolute relative to the ground under the root).
-    fn pose_targets(&self, f: &Frame, contacts: &[[f64; 3]; LIMBS], targets: &mut [f64]) {
+    fn pose_targets(
+        &self,
+        f: &Frame,
+        contacts: &[[f64; 3]; LIMBS],
+        hand_force: [f64; 2],
+        targets: &mut [f64],
+    ) {
         let j = &self.joints;
         let g = &self.geo;
         let p = &self.params;
         for leg in 0..2 {
             let knee = contacts[leg];
             let rel = sub([knee[0], knee[1], knee[2] - f.pelvis_height], f.hip[leg]);
-            let q = limb_ik(g.thigh, 0.0, 1.0, rot_y(-f.pelvis_pitch, rel));
+            let q = limb_ik(g.thigh, 0.0, 1.0, false, rot_y(-f.pelvis_pitch, rel));
             // Shin back along the ground, its foot end lifted by `shin_lift`.
             let thigh_pitch = f.pelvis_pitch + q[1];
             targets[j.hip[leg][0]] = q[0];
@@ -572,11 +602,22 @@ impl CrawlGait {
                 [hand[0], hand[1], hand[2] - f.pelvis_height],
                 f.shoulder[arm],
             );
-            let q = limb_ik(g.upper_arm, g.forearm, -1.0, rot_y(-f.torso_pitch, rel));
+            let local = rot_y(-f.torso_pitch, rel);
+            let q = limb_ik(g.upper_arm, g.forearm, -1.0, f.arm_up, local);
+            // Gravity feed-forward: the torque that holds the hand's share of the
+            // weight, realised as a PD offset (a bent arm sags by load / kp otherwise).
+            let force = rot_y(-f.torso_pitch, [0.0, 0.0, hand_force[arm]]);
+            let elbow = [-g.upper_arm * q[1].sin(), 0.0, -g.upper_arm * q[1].cos()];
+            let hold = |joint: usize, r: [f64; 3]| {
+                let torque = -(r[2] * force[0] - r[0] * force[2]);
+                let jd = &JOINTS[joint];
+                torque.clamp(-jd.max_torque, jd.max_torque) / jd.kp
+            };
+            let sh = j.shoulder[arm][1];
             targets[j.shoulder[arm][0]] = q[0];
-            targets[j.shoulder[arm][1]] = q[1];
+            targets[sh] = q[1] + hold(sh, local);
             targets[j.shoulder[arm][2]] = 0.0;
-            targets[j.elbow[arm]] = q[2];
+            targets[j.elbow[arm]] = q[2] + hold(j.elbow[arm], sub(local, elbow));
         }
         targets[j.spine_y] = p.spine_pitch;
         targets[j.neck_y] = p.neck_pitch;
@@ -666,7 +707,7 @@ impl CrawlGait {
                 let s = smoothstep(t / p.down_time);
                 let mut crawl = [0.0; NUM_JOINTS];
                 let contacts = self.grounded(obs, &nominal);
-                self.pose_targets(&f, &contacts, &mut crawl);
+                self.pose_targets(&f, &contacts, [0.0; 2], &mut crawl);
                 self.through_squat(&self.from, &crawl, t / p.down_time, targets);
                 let t = t + CONTROL_DT;
                 self.mode = if t >= p.down_time {
@@ -697,12 +738,22 @@ impl CrawlGait {
                     height0,
                 };
                 let stand_height = plamo_physics::humanoid::STANDING_PELVIS_HEIGHT - 0.02;
-                (
-                    [0.0; 2],
-                    pitch0 * (1.0 - s),
-                    height0 + s * (stand_height - height0),
-                    0.0,
-                )
+                let u = t / p.up_time;
+                // Sitting back into the squat must let the pelvis sink onto the heels:
+                // no lift until the legs straighten.
+                let height = if u < p.squat_share {
+                    obs.root_height.min(height0)
+                } else {
+                    let s2 = smoothstep((u - p.squat_share) / (1.0 - p.squat_share));
+                    obs.root_height.min(height0) + s2 * (stand_height - height0).max(0.0)
+                };
+                // The hands push the body back over the feet while sitting back.
+                let back = if u < p.squat_share {
+                    -p.sit_back_speed
+                } else {
+                    0.0
+                };
+                ([back, 0.0], pitch0 * (1.0 - s), height, 0.0)
             }
             Mode::Crawl => {
                 let dv = p.max_accel * CONTROL_DT;
@@ -767,7 +818,9 @@ impl CrawlGait {
                     c[2] += p.attitude_gain * (roll * n[1] - pitch_err * n[0])
                         - p.height_gain_limbs * height_err;
                 }
-                self.pose_targets(&f, &contacts, targets);
+                let load = 0.5 * p.hand_load * self.settings.body_mass * GRAVITY;
+                let hand_force = [2, 3].map(|i| if self.in_swing[i] { 0.0 } else { load });
+                self.pose_targets(&f, &contacts, hand_force, targets);
                 (self.v_cmd, f.pelvis_pitch, f.pelvis_height, yaw_rate)
             }
         };
@@ -787,7 +840,7 @@ impl CrawlGait {
             [
                 -(p.rot_gain * roll + p.rot_damping * wx),
                 -(p.rot_gain * (pitch - pitch_des) + p.rot_damping * wy),
-                p.rot_damping * (yaw_rate - wz),
+                p.rot_gain * 0.2 * heading_err + p.rot_damping * (yaw_rate - wz),
             ],
             self.settings.residual_torque_cap,
         );
@@ -848,8 +901,8 @@ mod tests {
     fn limb_ik_reaches_targets_up_and_down() {
         let (l1, l2) = (0.28, 0.29);
         for bend in [1.0, -1.0] {
-            for p in [[0.1, 0.05, -0.4], [0.4, -0.05, 0.15], [-0.2, 0.1, -0.3]] {
-                let [qx, qy, b] = limb_ik(l1, l2, bend, p);
+            for p in [[0.1, 0.05, -0.4], [0.4, -0.05, 0.25], [-0.2, 0.1, -0.3]] {
+                let [qx, qy, b] = limb_ik(l1, l2, bend, p[2] > 0.0, p);
                 // Forward kinematics: Rx(qx) [Ry(qy)(0,0,-l1) + Ry(qy+b)(0,0,-l2)].
                 let x = -l1 * qy.sin() - l2 * (qy + b).sin();
                 let z = -l1 * qy.cos() - l2 * (qy + b).cos();
