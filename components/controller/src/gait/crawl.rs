@@ -840,7 +840,7 @@ impl CrawlGait {
             [
                 -(p.rot_gain * roll + p.rot_damping * wx),
                 -(p.rot_gain * (pitch - pitch_des) + p.rot_damping * wy),
-                p.rot_gain * 0.2 * heading_err + p.rot_damping * (yaw_rate - wz),
+                p.rot_gain * heading_err + p.rot_damping * (yaw_rate - wz),
             ],
             self.settings.residual_torque_cap,
         );
