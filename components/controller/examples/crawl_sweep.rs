@@ -3,7 +3,9 @@
 //! part of it.
 //!
 //! `cargo run --release -p plamo-controller --features mujoco --example crawl_sweep --
-//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc]`
+//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc|trace]
+//! [terrains: flat,slope,rough,stairs]` (the sloped, rough and stair strips are the
+//! builtin `terrain-*` scenes `plamo eval locomotion` uses, from x 5, y 3).
 use std::error::Error;
 
 use plamo_controller::{
@@ -42,57 +44,70 @@ fn main() -> Result<(), Box<dyn Error>> {
         Some(p) => CrawlParams::load(std::path::Path::new(&p))?,
         None => CrawlParams::default(),
     };
-    for &engine in &engines {
-        for &speed in &speeds {
-            let ms: Vec<MetricsSummary> = (0..runs)
-                .into_par_iter()
-                .map(|r| {
-                    let mut policy = ModelBasedController::with_all_params(
-                        GaitParams::default(),
-                        crawl,
-                        settings.clone(),
-                    )
-                    .unwrap();
-                    let start = [0.37 * r as f64, 0.1 * (r % 3) as f64 - 0.1];
-                    let scene = flat_scene(speed * duration + 10.0);
-                    let path: Box<dyn HeadPath> = if arc {
-                        Box::new(ArcPath {
-                            start,
-                            speed,
-                            head_height: head,
-                            straight: 2.0,
-                            radius: if r % 2 == 0 { 3.0 } else { -3.0 },
-                        })
-                    } else {
-                        Box::new(StraightPath {
-                            start,
-                            speed,
-                            head_height: head,
-                        })
-                    };
-                    run_path(
-                        engine,
-                        &scene,
-                        path.as_ref(),
-                        duration,
-                        &mut policy,
-                        &settings,
-                    )
-                    .unwrap()
-                })
-                .collect();
-            let k = runs as f64;
-            let mean = |f: &dyn Fn(&MetricsSummary) -> f64| ms.iter().map(f).sum::<f64>() / k;
-            println!(
-                "{engine:?} {speed:.2} m/s: falls/run {:.2} xy {:.3} (max {:.2}) z {:.3} residual {:.3} (peak {:.3}) dir {:.3}",
-                mean(&|m| f64::from(m.falls)),
-                mean(&|m| m.xy_err_mean),
-                ms.iter().map(|m| m.xy_err_max).fold(0.0, f64::max),
-                mean(&|m| m.z_err_mean),
-                mean(&|m| m.residual_force_mean),
-                ms.iter().map(|m| m.residual_force_peak).fold(0.0, f64::max),
-                mean(&|m| m.mean_reward.dir),
-            );
+    let terrains: Vec<String> = arg(6, "flat").split(',').map(String::from).collect();
+    for terrain in &terrains {
+        for &engine in &engines {
+            for &speed in &speeds {
+                let ms: Vec<MetricsSummary> = (0..runs)
+                    .into_par_iter()
+                    .map(|r| {
+                        let mut policy = ModelBasedController::with_all_params(
+                            GaitParams::default(),
+                            crawl,
+                            settings.clone(),
+                        )
+                        .unwrap();
+                        let (scene, origin) = if terrain == "flat" {
+                            (flat_scene(speed * duration + 10.0), [0.0, 0.0])
+                        } else {
+                            (
+                                plamo_scenes::builtin(&format!("terrain-{terrain}")).unwrap(),
+                                [5.0, 3.0],
+                            )
+                        };
+                        let start = [
+                            origin[0] + 0.37 * r as f64,
+                            origin[1] + 0.1 * (r % 3) as f64 - 0.1,
+                        ];
+                        let path: Box<dyn HeadPath> = if arc {
+                            Box::new(ArcPath {
+                                start,
+                                speed,
+                                head_height: head,
+                                straight: 2.0,
+                                radius: if r % 2 == 0 { 3.0 } else { -3.0 },
+                            })
+                        } else {
+                            Box::new(StraightPath {
+                                start,
+                                speed,
+                                head_height: head,
+                            })
+                        };
+                        run_path(
+                            engine,
+                            &scene,
+                            path.as_ref(),
+                            duration,
+                            &mut policy,
+                            &settings,
+                        )
+                        .unwrap()
+                    })
+                    .collect();
+                let k = runs as f64;
+                let mean = |f: &dyn Fn(&MetricsSummary) -> f64| ms.iter().map(f).sum::<f64>() / k;
+                println!(
+                    "{terrain} {engine:?} {speed:.2} m/s: falls/run {:.2} xy {:.3} (max {:.2}) z {:.3} residual {:.3} (peak {:.3}) dir {:.3}",
+                    mean(&|m| f64::from(m.falls)),
+                    mean(&|m| m.xy_err_mean),
+                    ms.iter().map(|m| m.xy_err_max).fold(0.0, f64::max),
+                    mean(&|m| m.z_err_mean),
+                    mean(&|m| m.residual_force_mean),
+                    ms.iter().map(|m| m.residual_force_peak).fold(0.0, f64::max),
+                    mean(&|m| m.mean_reward.dir),
+                );
+            }
         }
     }
     Ok(())
@@ -116,13 +131,19 @@ fn trace(
     };
     let mut policy =
         ModelBasedController::with_all_params(GaitParams::default(), crawl, settings.clone())?;
-    let scene = flat_scene(speed * duration + 10.0);
+    let (scene, origin) = match std::env::var("PLAMO_TRACE_TERRAIN") {
+        Ok(t) if t != "flat" => (plamo_scenes::builtin(&format!("terrain-{t}"))?, [5.0, 3.0]),
+        _ => (flat_scene(speed * duration + 10.0), [0.0, 0.0]),
+    };
     // Start offsets as in the sweep's run `PLAMO_TRACE_RUN` (default 0).
     let r: usize = std::env::var("PLAMO_TRACE_RUN")
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(0);
-    let start = [0.37 * r as f64, 0.1 * (r % 3) as f64 - 0.1];
+    let start = [
+        origin[0] + 0.37 * r as f64,
+        origin[1] + 0.1 * (r % 3) as f64 - 0.1,
+    ];
     let path = UpDownPath {
         line: StraightPath {
             start,

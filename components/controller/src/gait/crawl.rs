@@ -131,6 +131,8 @@ pub struct CrawlParams {
     pub rot_gain: f64,
     /// Residual torque per rad/s of angular velocity \[N m s/rad\].
     pub rot_damping: f64,
+    /// Residual yaw torque per rad of heading error \[N m/rad\].
+    pub yaw_torque_gain: f64,
 }
 
 impl Default for CrawlParams {
@@ -175,7 +177,7 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 38] = [
+        let ranges: [(&'static str, f64, f64, f64); 39] = [
             ("sit_back_speed", self.sit_back_speed, 0.0, 2.0),
             ("hand_load", self.hand_load, 0.0, 1.0),
             ("attitude_gain", self.attitude_gain, 0.0, 10.0),
@@ -214,6 +216,7 @@ impl CrawlParams {
             ("vel_gain", self.vel_gain, 0.0, 50.0),
             ("height_gain", self.height_gain, 0.0, 500.0),
             ("rot_gain", self.rot_gain, 0.0, 5000.0),
+            ("yaw_torque_gain", self.yaw_torque_gain, 0.0, 5000.0),
         ];
         for (field, v, lo, hi) in ranges {
             if !(v.is_finite() && (lo..=hi).contains(&v)) {
@@ -840,7 +843,7 @@ impl CrawlGait {
             [
                 -(p.rot_gain * roll + p.rot_damping * wx),
                 -(p.rot_gain * (pitch - pitch_des) + p.rot_damping * wy),
-                p.rot_gain * heading_err + p.rot_damping * (yaw_rate - wz),
+                p.yaw_torque_gain * heading_err + p.rot_damping * (yaw_rate - wz),
             ],
             self.settings.residual_torque_cap,
         );
