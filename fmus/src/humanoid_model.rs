@@ -1,7 +1,9 @@
 //! `plamo.fmu`: the whole humanoid. Planner, controller and physics run in the
 //! orchestrator's in-process lockstep (120 Hz physics, 30 Hz control) whatever the
 //! host's communication step; the host can drive up to [`EXTERNAL_OBSTACLES`]
-//! obstacles (a ball, a car) that the planner re-plans around.
+//! obstacles (a ball, a car) that the planner re-plans around and the humanoid
+//! collides with (kinematic bodies in the physics world, moved from each sample at
+//! its velocity).
 //!
 //! Timing: a communication step to host time t runs every control step that ends at
 //! or before t (with a relative tolerance of 1e-9, so a host's 0.009999999999999998
@@ -73,7 +75,7 @@ pub fn spec() -> ModelSpec {
             "obstacle_radius",
             VarType::Real,
             "0.3",
-            "radius of the host-driven obstacles, spheres for the planner [m]",
+            "radius of the host-driven obstacles, spheres for the planner and physics [m]",
         ),
     ];
     for k in 1..=EXTERNAL_OBSTACLES {

@@ -100,6 +100,12 @@ pub trait PhysicsBackend: Send {
     fn humanoid_state(&self, index: usize) -> Result<&HumanoidState, PhysicsError>;
     /// Dynamic obstacle states, in `scene.dynamic` order, at the current tick.
     fn obstacles(&self) -> &[ObstacleState];
+    /// From the current tick on, move dynamic obstacle `index` (in `scene.dynamic`
+    /// order) from `state.position` at the constant `state.velocity` instead of by
+    /// its scene motion, until driven again: how an FMU host's ball or car enters the
+    /// world. It stays kinematic and pushes what it hits. A jump of more than 1 m
+    /// within one step (a host placing it) moves it without a sweep.
+    fn drive_obstacle(&mut self, index: usize, state: ObstacleState) -> Result<(), PhysicsError>;
 
     /// [`Self::reset_humanoid`] for humanoid 0.
     fn reset(&mut self, pose: &HumanoidPose) -> Result<(), PhysicsError> {

@@ -17,15 +17,19 @@
 //! - `fallen` in each reported state uses the most lenient posture (crawl): the head
 //!   is below 0.15 m above the ground or touches the terrain. Posture-aware fall
 //!   rules belong to whoever knows the requested posture (the orchestrator).
-//! - External obstacles are reported after the scene's obstacles; the backends do not
-//!   collide with them (they are scene-independent markers for hosts).
+//! - External obstacles (an FMU host's ball or car) need slots: a world built with
+//!   [`PhysicsComponent::with_external_slots`] takes its scene's last `n` dynamic
+//!   obstacles as theirs. At each step the input's external obstacle `k` drives slot
+//!   `k` (from its position at its constant velocity, [`PhysicsBackend::drive_obstacle`]),
+//!   so humanoids collide with it like with any scene obstacle, and it is reported
+//!   in the slot's place. More external obstacles than slots is an error.
 
 use plamo_interfaces::{
     ACTION_RESET, ACTION_TRACK, AgentAction, Component, ComponentError, MAX_AGENTS, MAX_BODIES,
     MAX_JOINTS, MAX_OBSTACLES, ObstacleSample, Outcome, PHYSICS_OBSERVE, PHYSICS_STEP,
     PHYSICS_STEPS_PER_CONTROL, PhysicsInput, PhysicsOutput, Tick,
 };
-use plamo_scenes::Scene;
+use plamo_scenes::{ObstacleState, Scene};
 
 use crate::{
     BackendKind, HumanoidPose, NUM_BODIES, NUM_JOINTS, PhysicsBackend, PhysicsError,
@@ -48,6 +52,8 @@ pub struct PhysicsComponent {
     backend: Box<dyn PhysicsBackend>,
     scene: Scene,
     agents: usize,
+    /// Index of the first external obstacle slot in `scene.dynamic`.
+    first_slot: usize,
 }
 
 /// An action asking physics to put `agent` back on its feet where it is (see the
@@ -102,9 +108,27 @@ impl PhysicsComponent {
         }
         Ok(Self {
             backend,
+            first_slot: scene.dynamic.len(),
             scene: scene.clone(),
             agents: placements.len(),
         })
+    }
+
+    /// The scene's last `n` dynamic obstacles become slots for external obstacles
+    /// (see the module docs); how they move until the first step is their scene
+    /// motion (e.g. parked out of the way).
+    pub fn with_external_slots(mut self, n: usize) -> Result<Self, PhysicsError> {
+        let own = self.scene.dynamic.len();
+        if n > own {
+            return Err(PhysicsError::InvalidScene {
+                reason: format!(
+                    "{n} external obstacle slots, but scene `{}` has only {own} dynamic obstacles to serve as slots",
+                    self.scene.name
+                ),
+            });
+        }
+        self.first_slot = own - n;
+        Ok(self)
     }
 
     /// The world's current tick.
@@ -118,11 +142,7 @@ impl PhysicsComponent {
     }
 
     /// Write the world as it is now into `out`.
-    pub fn observe(
-        &self,
-        external: &[ObstacleSample],
-        out: &mut PhysicsOutput,
-    ) -> Result<(), PhysicsError> {
+    pub fn observe(&self, out: &mut PhysicsOutput) -> Result<(), PhysicsError> {
         out.tick = self.backend.tick().0;
         out.agent_count = self.agents as u32;
         for i in 0..self.agents {
@@ -149,26 +169,45 @@ impl PhysicsComponent {
             let ground = self.scene.height_at(s.head[0], s.head[1]);
             m.fallen = detect_fall(s, Posture::Crawl, ground).is_some() as u32;
         }
-        let scene_obstacles = self.backend.obstacles();
-        let mut n = 0;
-        for o in scene_obstacles {
-            if n == MAX_OBSTACLES {
-                break;
-            }
-            out.obstacles[n] = ObstacleSample {
+        let obstacles = self.backend.obstacles();
+        let n = obstacles.len().min(MAX_OBSTACLES);
+        for (m, o) in out.obstacles.iter_mut().zip(&obstacles[..n]) {
+            *m = ObstacleSample {
                 position: o.position,
                 velocity: o.velocity,
             };
-            n += 1;
-        }
-        for e in external {
-            if n == MAX_OBSTACLES {
-                break;
-            }
-            out.obstacles[n] = *e;
-            n += 1;
         }
         out.obstacle_count = n as u32;
+        Ok(())
+    }
+
+    /// Move the external obstacle slots to the input's samples.
+    fn drive_external(&mut self, external: &[ObstacleSample]) -> Result<(), ComponentError> {
+        let slots = self.scene.dynamic.len() - self.first_slot;
+        if external.len() > slots {
+            return Err(ComponentError::InvalidInput {
+                component: Self::NAME,
+                field: "external_count",
+                reason: format!(
+                    "{} external obstacles, but this world has {slots} slots for them \
+                     (build it with `PhysicsComponent::with_external_slots`)",
+                    external.len()
+                ),
+            });
+        }
+        for (k, e) in external.iter().enumerate() {
+            let state = ObstacleState {
+                position: e.position,
+                velocity: e.velocity,
+            };
+            self.backend
+                .drive_obstacle(self.first_slot + k, state)
+                .map_err(|err| ComponentError::InvalidInput {
+                    component: Self::NAME,
+                    field: "external_obstacles",
+                    reason: format!("external obstacle {k}: {err}"),
+                })?;
+        }
         Ok(())
     }
 
@@ -243,11 +282,9 @@ impl Component for PhysicsComponent {
                 });
             }
         }
-        let external_count = (input.external_count as usize).min(MAX_OBSTACLES);
-        let external = &input.external_obstacles[..external_count];
         match input.mode {
             PHYSICS_OBSERVE => {
-                self.observe(external, output).map_err(failed)?;
+                self.observe(output).map_err(failed)?;
                 return Ok(Outcome::Continue);
             }
             PHYSICS_STEP => {}
@@ -274,10 +311,12 @@ impl Component for PhysicsComponent {
         for (i, a) in input.actions[..self.agents].iter().enumerate() {
             self.apply(i, a)?;
         }
+        let external_count = (input.external_count as usize).min(MAX_OBSTACLES);
+        self.drive_external(&input.external_obstacles[..external_count])?;
         self.backend
             .step_n(PHYSICS_STEPS_PER_CONTROL as usize)
             .map_err(failed)?;
-        self.observe(external, output).map_err(failed)?;
+        self.observe(output).map_err(failed)?;
         Ok(Outcome::Continue)
     }
 }

@@ -7,7 +7,7 @@ use plamo_physics::{
     BackendKind, FEET, HumanoidPose, NUM_JOINTS, PhysicsBackend, PhysicsError, PhysicsSettings,
     Posture, RootWrench, create_backend, detect_fall,
 };
-use plamo_scenes::Scene;
+use plamo_scenes::{ObstacleState, Scene};
 
 fn backend(kind: BackendKind, scene: &Scene) -> Box<dyn PhysicsBackend> {
     create_backend(kind, scene, &PhysicsSettings::default()).expect("backend builds")
@@ -105,6 +105,66 @@ pub fn kinematic_obstacle_pushes(kind: BackendKind) {
         s.root_position[0] < -0.3,
         "{kind}: pushed back to x = {}",
         s.root_position[0]
+    );
+}
+
+/// A host-driven obstacle: placed from its parking spot without flinging anything,
+/// moved at its sample's velocity, and pushing the humanoid it runs into.
+pub fn driven_obstacle_pushes(kind: BackendKind) {
+    let scene = common::parked_ball();
+    let mut b = backend(kind, &scene);
+    b.reset(&stand_pose(&scene, 0.0, 0.0)).unwrap();
+    let start = [-2.4, 0.0, 0.9];
+    let velocity = [2.0, 0.0, 0.0];
+    let sample = ObstacleState {
+        position: start,
+        velocity,
+    };
+    let e = b.drive_obstacle(1, sample).unwrap_err();
+    assert!(
+        matches!(e, PhysicsError::InvalidScene { .. }),
+        "{kind}: {e}"
+    );
+    assert!(
+        e.to_string().contains("no dynamic obstacle 1"),
+        "{kind}: {e}"
+    );
+    let mut nan = sample;
+    nan.velocity[2] = f64::NAN;
+    let e = b.drive_obstacle(0, nan).unwrap_err();
+    assert!(matches!(e, PhysicsError::NonFinite { .. }), "{kind}: {e}");
+
+    let t0 = b.tick().seconds();
+    b.drive_obstacle(0, sample).unwrap();
+    // 0.4 s: the ball has jumped up from z = -1000 m and rolls in, still 1.3 m away.
+    hold(b.as_mut(), 48);
+    let still = b.state();
+    assert!(
+        still.root_position[0].abs() < 0.05 && still.root_linvel.iter().all(|v| v.abs() < 0.2),
+        "{kind}: placing the ball disturbed the humanoid: root {:?}, velocity {:?}",
+        still.root_position,
+        still.root_linvel
+    );
+    let mut touched = false;
+    for _ in 0..132 {
+        b.set_action(&[0.0; NUM_JOINTS], None).unwrap();
+        b.step().unwrap();
+        touched |= b.state().contact.iter().any(|c| *c) && b.obstacles()[0].position[0] > -0.6;
+        let dt = b.tick().seconds() - t0;
+        let expected = [0, 1, 2].map(|i| start[i] + velocity[i] * dt);
+        let got = b.obstacles()[0].position;
+        assert!(
+            (0..3).all(|i| (got[i] - expected[i]).abs() < 1e-9),
+            "{kind}: ball at {got:?}, driven to {expected:?}"
+        );
+    }
+    assert!(touched, "{kind}: the ball never touched the humanoid");
+    let s = b.state();
+    assert!(
+        s.root_position[0] > 0.3 || s.head[2] < 1.0,
+        "{kind}: the ball did not push the humanoid (root {:?}, head {:?})",
+        s.root_position,
+        s.head
     );
 }
 
@@ -367,6 +427,10 @@ macro_rules! conformance {
             #[test]
             fn kinematic_obstacle_pushes() {
                 super::kinematic_obstacle_pushes($kind);
+            }
+            #[test]
+            fn driven_obstacle_pushes() {
+                super::driven_obstacle_pushes($kind);
             }
             #[test]
             fn ceiling_blocks_upright_humanoid() {

@@ -1,11 +1,13 @@
 //! Obstacles driven from outside the run (an FMU host's ball or car).
 //!
 //! The planner predicts collisions only for obstacles its scene describes (their
-//! shapes), and matches observed states to them by index. So the planner of a run
-//! with external obstacles gets the scene plus one entry per external obstacle,
-//! parked out of the way; physics keeps the plain scene and reports the external
-//! states after its own obstacles, in the same order ([`Lockstep::set_external_obstacles`]
-//! puts them there). Physics does not collide with them (see `PhysicsComponent`).
+//! shapes), and matches observed states to them by index; physics collides only with
+//! bodies its world holds. So the planners and physics of a run with external
+//! obstacles get the scene plus one slot per external obstacle ([`slot_scene`]),
+//! parked out of the way until driven. Physics moves each slot to its host's sample
+//! every control step (`PhysicsComponent::with_external_slots`), so the humanoid
+//! collides with it and physics reports it in the slot's place, where
+//! [`Lockstep::set_external_obstacles`] also puts it for the planners' current tick.
 //!
 //! [`Lockstep::set_external_obstacles`]: super::Lockstep::set_external_obstacles
 
@@ -25,8 +27,8 @@ pub const PARKED_SAMPLE: ObstacleSample = ObstacleSample {
     velocity: [0.0; 3],
 };
 
-/// The scene as the planner sees it: `scene` plus one parked obstacle of each shape.
-pub fn planner_scene(scene: &Scene, shapes: &[ObstacleShape]) -> Result<Scene, RunError> {
+/// `scene` plus one parked obstacle slot of each shape, after the scene's own.
+pub fn slot_scene(scene: &Scene, shapes: &[ObstacleShape]) -> Result<Scene, RunError> {
     let room = MAX_OBSTACLES.saturating_sub(scene.dynamic.len());
     if shapes.len() > room {
         return Err(RunError::Setup(format!(
@@ -50,21 +52,21 @@ pub fn planner_scene(scene: &Scene, shapes: &[ObstacleShape]) -> Result<Scene, R
     Ok(s)
 }
 
-/// Every component of `spec` in this process, its planners aware of external
-/// obstacles of the given shapes (for agent placement, controllers and physics the
+/// Every component of `spec` in this process, its planners and physics with one slot
+/// per external obstacle of the given shapes (for agent placement and controllers the
 /// scene is `scene` itself).
 pub fn in_process_with_external(
     spec: &RunSpec,
     scene: &Scene,
     shapes: &[ObstacleShape],
 ) -> Result<Links, RunError> {
-    let planner_view = planner_scene(scene, shapes)?;
+    let with_slots = slot_scene(scene, shapes)?;
     let mut planners: Vec<Box<dyn Link<_, _>>> = Vec::new();
     let mut controllers: Vec<Box<dyn Link<_, _>>> = Vec::new();
     for k in 0..spec.agents() {
         let start = spec.placement(scene, k)?;
         let planner = plamo_planner::Planner::new(
-            planner_view.clone(),
+            with_slots.clone(),
             &spec.instructions[k],
             [start.x, start.y],
             plamo_planner::PlannerSettings::default(),
@@ -80,7 +82,12 @@ pub fn in_process_with_external(
         )));
     }
     Ok(Links {
-        physics: Box::new(InProcess::new("physics", spec.physics(scene)?)),
+        physics: Box::new(InProcess::new(
+            "physics",
+            spec.physics(&with_slots)?
+                .with_external_slots(shapes.len())
+                .map_err(|e| RunError::Setup(e.to_string()))?,
+        )),
         planners,
         controllers,
     })

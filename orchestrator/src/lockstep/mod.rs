@@ -175,10 +175,11 @@ impl Lockstep {
     }
 
     /// Drive external obstacles (an FMU host's ball or car) from now on: the planners
-    /// see these states at the current tick (after the scene's obstacles, matching
-    /// the extra entries of [`external::planner_scene`]), physics carries them through
-    /// the coming control period and reports them at the next tick. They stay until
-    /// set again. Refuses non-finite numbers and more than fit in a world.
+    /// see these states at the current tick (after the scene's obstacles, in the
+    /// slots of [`external::slot_scene`]), physics moves its slots from them at their
+    /// velocities through the coming control period (the humanoid collides with them)
+    /// and reports them at the next tick. They stay until set again. Refuses
+    /// non-finite numbers and more than fit in a world.
     pub fn set_external_obstacles(&mut self, obstacles: &[ObstacleSample]) -> Result<(), RunError> {
         let own = self.scene.dynamic.len().min(MAX_OBSTACLES);
         external::check(own, obstacles)?;

@@ -15,7 +15,7 @@ use plamo_scenes::{ObstacleState, Scene};
 pub use mjcf::humanoid_mjcf;
 
 use crate::humanoid::{HEAD, HEAD_OFFSET, JOINT_NAMES, PELVIS};
-use crate::obstacles::obstacle_pose;
+use crate::obstacles::ObstacleMotions;
 use crate::state::sanitize_action;
 use crate::{
     BODY_NAMES, BackendKind, HumanoidPose, HumanoidState, NUM_BODIES, NUM_JOINTS, PhysicsBackend,
@@ -35,7 +35,6 @@ struct Layout {
 /// The MuJoCo implementation of [`PhysicsBackend`].
 pub struct MujocoBackend {
     data: MjData<Box<MjModel>>,
-    scene: Scene,
     settings: PhysicsSettings,
     layouts: Vec<Layout>,
     /// geom id -> (humanoid, body) for humanoid geoms.
@@ -45,6 +44,7 @@ pub struct MujocoBackend {
     mocap: Vec<usize>,
     states: Vec<HumanoidState>,
     obstacles: Vec<ObstacleState>,
+    motions: ObstacleMotions,
     tick: Tick,
     bad_qacc_warnings: i32,
     diverged: Vec<bool>,
@@ -130,14 +130,10 @@ impl MujocoBackend {
             mocap.push(model.body_mocapid()[b] as usize);
         }
         let data = MjData::new(Box::new(model));
-        let obstacles = scene
-            .dynamic
-            .iter()
-            .map(|ob| obstacle_pose(ob, 0.0).0)
-            .collect();
+        let motions = ObstacleMotions::new(scene);
+        let obstacles = motions.states_at(0.0).collect();
         let mut backend = Self {
             data,
-            scene: scene.clone(),
             settings: settings.clone(),
             states: vec![HumanoidState::default(); layouts.len()],
             diverged: vec![false; layouts.len()],
@@ -146,6 +142,7 @@ impl MujocoBackend {
             terrain_geom,
             mocap,
             obstacles,
+            motions,
             tick: Tick(0),
             bad_qacc_warnings: 0,
         };
@@ -302,8 +299,8 @@ impl PhysicsBackend for MujocoBackend {
             return Err(PhysicsError::still_diverged(BackendKind::Mujoco, self.tick));
         }
         let t_next = self.tick.advanced(1).seconds();
-        for (k, ob) in self.scene.dynamic.iter().enumerate() {
-            let (s, yaw) = obstacle_pose(ob, t_next);
+        for k in 0..self.mocap.len() {
+            let (s, yaw) = self.motions.pose(k, t_next);
             let m = self.mocap[k];
             self.data.mocap_pos_mut()[m] = s.position;
             self.data.mocap_quat_mut()[m] = math::quat_from_yaw(yaw);
@@ -342,6 +339,10 @@ impl PhysicsBackend for MujocoBackend {
 
     fn obstacles(&self) -> &[ObstacleState] {
         &self.obstacles
+    }
+
+    fn drive_obstacle(&mut self, index: usize, state: ObstacleState) -> Result<(), PhysicsError> {
+        self.motions.drive(index, state, self.tick.seconds())
     }
 }
 

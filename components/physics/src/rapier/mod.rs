@@ -13,7 +13,7 @@ use plamo_interfaces::{PHYSICS_DT, Tick};
 use plamo_scenes::{ObstacleState, Scene};
 use rapier3d::prelude::*;
 
-use crate::obstacles::obstacle_pose;
+use crate::obstacles::ObstacleMotions;
 use crate::state::sanitize_action;
 use crate::{
     BackendKind, HumanoidPose, HumanoidState, PhysicsBackend, PhysicsError, PhysicsSettings,
@@ -27,12 +27,12 @@ pub(crate) use world::validate_terrain;
 /// The rapier implementation of [`PhysicsBackend`].
 pub struct RapierBackend {
     world: PhysicsWorld,
-    scene: Scene,
     settings: PhysicsSettings,
     handles: SceneHandles,
     humanoids: Vec<RapierHumanoid>,
     states: Vec<HumanoidState>,
     obstacles: Vec<ObstacleState>,
+    motions: ObstacleMotions,
     tick: Tick,
     /// Set when a step diverged; cleared when every humanoid has been reset since.
     diverged: Vec<bool>,
@@ -53,20 +53,17 @@ impl RapierBackend {
             let pose = default_pose(scene, i);
             humanoids.push(RapierHumanoid::build(&mut world, &pose, settings.friction));
         }
-        let obstacles = scene
-            .dynamic
-            .iter()
-            .map(|ob| obstacle_pose(ob, 0.0).0)
-            .collect();
+        let motions = ObstacleMotions::new(scene);
+        let obstacles = motions.states_at(0.0).collect();
         let mut backend = Self {
             world,
-            scene: scene.clone(),
             settings: settings.clone(),
             handles,
             states: vec![HumanoidState::default(); humanoids.len()],
             diverged: vec![false; humanoids.len()],
             humanoids,
             obstacles,
+            motions,
             tick: Tick(0),
         };
         for i in 0..backend.humanoids.len() {
@@ -136,7 +133,7 @@ impl PhysicsBackend for RapierBackend {
             return Err(PhysicsError::still_diverged(BackendKind::Rapier, self.tick));
         }
         let t_next = self.tick.advanced(1).seconds();
-        world::drive_obstacles(&mut self.world, &self.scene, &self.handles, t_next);
+        world::drive_obstacles(&mut self.world, &self.motions, &self.handles, t_next);
         for h in &mut self.humanoids {
             h.apply_controls(&mut self.world);
         }
@@ -152,8 +149,12 @@ impl PhysicsBackend for RapierBackend {
                 "rapier panicked inside the step",
             ));
         }
-        for (o, ob) in self.obstacles.iter_mut().zip(&self.scene.dynamic) {
-            *o = obstacle_pose(ob, t_next).0;
+        for (o, s) in self
+            .obstacles
+            .iter_mut()
+            .zip(self.motions.states_at(t_next))
+        {
+            *o = s;
         }
         let quarantined = !self.world.quarantine().is_empty();
         let mut bad = None;
@@ -181,5 +182,9 @@ impl PhysicsBackend for RapierBackend {
 
     fn obstacles(&self) -> &[ObstacleState] {
         &self.obstacles
+    }
+
+    fn drive_obstacle(&mut self, index: usize, state: ObstacleState) -> Result<(), PhysicsError> {
+        self.motions.drive(index, state, self.tick.seconds())
     }
 }

@@ -14,7 +14,7 @@ use plamo_scenes::{ObstacleShape, Scene};
 use rapier3d::parry::utils::Array2;
 use rapier3d::prelude::*;
 
-use crate::obstacles::obstacle_pose;
+use crate::obstacles::{ObstacleMotions, obstacle_pose};
 use crate::{PhysicsError, PhysicsSettings};
 
 /// Collision group of humanoid colliders.
@@ -166,17 +166,27 @@ pub(crate) fn build_scene(
 
 /// Set every obstacle's kinematic target to its pose at time `t` (the end of the
 /// coming step), so rapier gives it the matching velocity and it pushes what it hits.
+/// A target more than [`TELEPORT`] away (a host placing its obstacle) is reached
+/// without velocity: swept at that speed it would fling whatever it crossed.
 pub(crate) fn drive_obstacles(
     world: &mut PhysicsWorld,
-    scene: &Scene,
+    motions: &ObstacleMotions,
     handles: &SceneHandles,
     t: f64,
 ) {
-    for (ob, &h) in scene.dynamic.iter().zip(&handles.obstacles) {
-        let (s, yaw) = obstacle_pose(ob, t);
-        world.bodies[h].set_next_kinematic_position(pose_from_yaw(s.position, yaw));
+    for (k, &h) in handles.obstacles.iter().enumerate() {
+        let (s, yaw) = motions.pose(k, t);
+        let pose = pose_from_yaw(s.position, yaw);
+        let body = &mut world.bodies[h];
+        if (body.translation() - pose.translation).length() > TELEPORT {
+            body.set_position(pose, true);
+        }
+        body.set_next_kinematic_position(pose);
     }
 }
+
+/// Largest obstacle displacement in one step that is swept with velocity \[m\].
+const TELEPORT: Real = 1.0;
 
 #[cfg(test)]
 mod tests {

@@ -71,6 +71,21 @@ pub fn pushing_box() -> Scene {
     s
 }
 
+/// A 0.3 m ball parked 1000 m below the ground: a slot a host drives.
+pub fn parked_ball() -> Scene {
+    let mut s = flat();
+    s.dynamic.push(DynamicObstacle {
+        name: "host-ball".into(),
+        shape: ObstacleShape::Sphere { radius: 0.3 },
+        motion: Motion::Linear {
+            from: [0.0, 0.0, -1000.0],
+            to: [0.0, 0.0, -1000.0],
+            speed: 1.0,
+        },
+    });
+    s
+}
+
 /// A ceiling whose underside is at `z_bottom`, covering x in [x0, x0 + 2], |y| < 1.
 pub fn ceiling(x0: f64, z_bottom: f64) -> Scene {
     let mut s = flat();
