@@ -144,6 +144,7 @@ async function main() {
 
   const loader = new GLTFLoader();
   const runs = [];
+  let pathCount = 0;
   for (const [r, run] of DATA.runs.entries()) {
     const gltf = await new Promise((ok, fail) => loader.parse(base64ToBuffer(run.glb), "", ok, fail));
     const root = gltf.scene;
@@ -202,15 +203,17 @@ async function main() {
         const line = fatLine(pts, cols, 5, resolution);
         world.add(line);
       }
-      // Executed head path, drawn up to the current time.
+      // Executed head path, drawn up to the current time, one colour per humanoid
+      // across all runs (a 2-agent run must not draw both paths alike).
+      const color = RUN_COLORS[pathCount++ % RUN_COLORS.length];
       let executed = null;
       if (a.head.length >= 2) {
-        executed = fatLine(a.head, null, 3, resolution, { color: RUN_COLORS[r % RUN_COLORS.length] });
+        executed = fatLine(a.head, null, 3, resolution, { color });
         world.add(executed);
       }
-      return { data: a, pelvis, executed };
+      return { data: a, pelvis, executed, color };
     });
-    runs.push({ run, mixer, duration, agents, color: RUN_COLORS[r % RUN_COLORS.length] });
+    runs.push({ run, mixer, duration, agents, color: agents[0]?.color ?? RUN_COLORS[0] });
   }
   const duration = Math.max(...runs.map((r) => r.duration), 0);
 
@@ -234,7 +237,12 @@ async function main() {
   legend.innerHTML = `<div>planned path, colour = planned speed</div><div class="bar"></div>
     <div class="row"><span>0</span><span>1.5</span><span>${SPEED_MAX} m/s</span></div>
     ${runs
-      .map((r) => `<div><span class="swatch" style="background:${r.color}"></span>executed head path · ${escapeHtml(r.run.physics)} (${escapeHtml(r.run.name)})</div>`)
+      .flatMap((r) =>
+        r.agents.map(
+          (a, k) =>
+            `<div><span class="swatch" style="background:${a.color}"></span>executed head path · ${escapeHtml(r.run.physics)} (${escapeHtml(r.run.name)})${r.agents.length > 1 ? ` · humanoid ${k}` : ""}</div>`,
+        ),
+      )
       .join("")}
     <div id="help">drag: orbit · wheel: zoom · right-drag: pan<br>space: play/pause · F: follow · ←/→: step</div>`;
 
