@@ -27,10 +27,14 @@ fn main() -> Result<(), Box<dyn Error>> {
     let duration: f64 = arg(3, "10").parse()?;
     let runs: usize = arg(4, "4").parse()?;
     let arc = arg(5, "straight") == "arc";
-    let settings = ControllerSettings {
+    let mut settings = ControllerSettings {
         body_mass: plamo_physics::humanoid::total_mass(),
         ..Default::default()
     };
+    // PLAMO_RESIDUAL_CAP=0.1 measures the gait under a smaller residual force cap.
+    if let Some(cap) = std::env::var_os("PLAMO_RESIDUAL_CAP") {
+        settings.residual_force_cap = cap.to_string_lossy().parse()?;
+    }
     let params = match std::env::var_os("PLAMO_GAIT_PARAMS") {
         Some(p) => GaitParams::load(std::path::Path::new(&p))?,
         None => GaitParams::default(),

@@ -47,8 +47,17 @@ impl Form {
     pub fn task(self) -> (f64, [f64; 2]) {
         match self {
             Form::Walk => (1.47, [1.0, 2.0]),
-            Form::Run => (1.47, [2.0, 4.0]),
-            Form::Crouch => (0.8, [0.5, 1.5]),
+            Form::Run => (1.47, [2.5, 4.0]),
+            Form::Crouch => (0.8, [0.6, 2.0]),
+        }
+    }
+
+    /// Weight of the head Z error in the cost \[-\]: the crouch's point is its low
+    /// head (an earlier search kept the head 0.25 m high to avoid falls).
+    fn z_weight(self) -> f64 {
+        match self {
+            Form::Crouch => 3.0,
+            Form::Walk | Form::Run => 1.0,
         }
     }
 
@@ -63,7 +72,7 @@ impl Form {
 
 /// Tuned fields with their search box (units of the field, see [`FormParams`] and,
 /// for `residual.*`, [`crate::ResidualGains`], which all forms share).
-const TUNED: [(&str, f64, f64); 17] = [
+const TUNED: [(&str, f64, f64); 20] = [
     ("step_time", 0.25, 0.55),
     ("swing_height", 0.04, 0.16),
     ("pelvis_height", 0.80, 0.93),
@@ -78,6 +87,9 @@ const TUNED: [(&str, f64, f64); 17] = [
     ("stance_push", 0.0, 0.2),
     ("swing_comp", 0.0, 1.0),
     ("speed_ki", 0.0, 0.5),
+    ("step_time_per_speed", 0.0, 0.15),
+    ("push_err_gain", 0.0, 0.3),
+    ("swing_lead", 0.0, 0.15),
     // The residual should only catch what the gait cannot do: its gains are tuned
     // with the gait, so the cost's residual term can push them down.
     ("residual.vel_gain", 0.0, 4.0),
@@ -87,7 +99,7 @@ const TUNED: [(&str, f64, f64); 17] = [
 
 /// Crouch-walk search box: a head at 0.8 m needs a low pelvis and a strong lean (the
 /// spine carries part of it); the residual gains stay the walk's.
-const TUNED_CROUCH: [(&str, f64, f64); 15] = [
+const TUNED_CROUCH: [(&str, f64, f64); 18] = [
     ("step_time", 0.25, 0.6),
     ("swing_height", 0.04, 0.14),
     ("pelvis_height", 0.45, 0.75),
@@ -103,13 +115,21 @@ const TUNED_CROUCH: [(&str, f64, f64); 15] = [
     ("swing_comp", 0.0, 1.0),
     ("speed_ki", 0.0, 0.5),
     ("lean_per_speed", 0.0, 0.15),
+    ("step_time_per_speed", 0.0, 0.15),
+    ("push_err_gain", 0.0, 0.3),
+    ("swing_lead", 0.0, 0.15),
 ];
+
+/// Number of shared residual gains at the end of [`TUNED`]: only the walk search moves
+/// them (the run's search would change the walk's residual under it).
+const RESIDUAL_FIELDS: usize = 3;
 
 /// The search box of a form.
 fn tuned(form: Form) -> &'static [(&'static str, f64, f64)] {
     match form {
         Form::Crouch => &TUNED_CROUCH,
-        Form::Walk | Form::Run => &TUNED,
+        Form::Walk => &TUNED,
+        Form::Run => &TUNED[..TUNED.len() - RESIDUAL_FIELDS],
     }
 }
 
@@ -136,6 +156,9 @@ fn field<'a>(p: &'a mut GaitParams, form: Form, name: &str) -> &'a mut f64 {
         "stance_push" => &mut f.stance_push,
         "speed_ki" => &mut f.speed_ki,
         "spine_pitch" => &mut f.spine_pitch,
+        "step_time_per_speed" => &mut f.step_time_per_speed,
+        "push_err_gain" => &mut f.push_err_gain,
+        "swing_lead" => &mut f.swing_lead,
         _ => &mut f.swing_comp,
     }
 }
@@ -164,9 +187,13 @@ pub struct TuneSettings {
 /// Cost of a fall \[m-equivalent\]: more than the XY error a reset onto the plan saves.
 const FALL_COST: f64 = 1.0;
 
+/// Cost per unit of mean residual force (fraction of m*g) \[m-equivalent\]: 0.1 m*g
+/// weighs as 0.2 m of XY error, so the search prefers a gait that propels itself.
+const RESIDUAL_COST: f64 = 2.0;
+
 /// Cost of one parameter set: mean over rollouts of
-/// `xy_err + z_err + residual_force_mean + FALL_COST * falls` (metres, fraction of m*g,
-/// count).
+/// `xy_err + w_z * z_err + RESIDUAL_COST * residual_force_mean + FALL_COST * falls`
+/// (metres, fraction of m*g, count; `w_z` 3 for the crouch, else 1).
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct Cost {
     /// Total cost \[-\].
@@ -226,7 +253,10 @@ pub fn evaluate(params: &GaitParams, s: &TuneSettings, seed: u64) -> Result<Cost
             )?;
             let falls = f64::from(m.falls);
             Ok(Cost {
-                total: m.xy_err_mean + m.z_err_mean + m.residual_force_mean + FALL_COST * falls,
+                total: m.xy_err_mean
+                    + s.form.z_weight() * m.z_err_mean
+                    + RESIDUAL_COST * m.residual_force_mean
+                    + FALL_COST * falls,
                 falls,
                 xy: m.xy_err_mean,
                 z: m.z_err_mean,

@@ -39,13 +39,15 @@ fn walk(speed: f64) {
     .unwrap();
     eprintln!("{}", serde_json::to_string_pretty(&m).unwrap());
     assert_eq!(m.falls, 0, "fell at {speed} m/s");
-    // Paper Table 2, walk on flat: XY 0.24 m, Z 0.21 m.
-    assert!(m.xy_err_mean < 0.3, "xy error {}", m.xy_err_mean);
+    // Paper Table 2, walk on flat: XY 0.24 m, Z 0.21 m. Measured XY 0.05 / 0.16 m.
+    assert!(m.xy_err_mean < 0.25, "xy error {}", m.xy_err_mean);
     assert!(m.z_err_mean < 0.1, "z error {}", m.z_err_mean);
-    // Measured 0.11-0.13 m*g with the shipped parameters.
+    // Measured 0.069 / 0.106 m*g with the shipped parameters: at 1 m/s within the
+    // issue's 10% goal.
+    let residual_max = if speed <= 1.0 { 0.09 } else { 0.13 };
     assert!(
-        m.residual_force_mean <= 0.16,
-        "residual {}",
+        m.residual_force_mean <= residual_max,
+        "residual {} at {speed} m/s",
         m.residual_force_mean
     );
     assert!(m.residual_force_peak <= settings.residual_force_cap + 1e-9);
@@ -78,9 +80,10 @@ fn walk_turns_along_an_arc_in_mujoco() {
     .unwrap();
     eprintln!("{}", serde_json::to_string_pretty(&m).unwrap());
     assert_eq!(m.falls, 0, "fell on the arc");
-    assert!(m.xy_err_mean < 0.3, "xy error {}", m.xy_err_mean);
+    // Measured XY 0.06 m, direction reward 0.89.
+    assert!(m.xy_err_mean < 0.2, "xy error {}", m.xy_err_mean);
     assert!(
-        m.mean_reward.dir > 0.7,
+        m.mean_reward.dir > 0.75,
         "direction reward {}",
         m.mean_reward.dir
     );
@@ -110,8 +113,9 @@ fn crouch_walk_at_1_m_per_s_does_not_fall_in_mujoco() {
     .unwrap();
     eprintln!("{}", serde_json::to_string_pretty(&m).unwrap());
     assert_eq!(m.falls, 0, "fell crouch-walking");
-    assert!(m.xy_err_mean < 0.3, "xy error {}", m.xy_err_mean);
+    assert!(m.xy_err_mean < 0.2, "xy error {}", m.xy_err_mean);
     // The shipped crouch gets the head down to ~1.05 m of the requested 0.8 m (Z
-    // 0.25 m; the paper reaches 0.03 m): this bounds the regression, not the goal.
+    // 0.26 m measured; the paper reaches 0.03 m): this bounds the regression, not the
+    // goal.
     assert!(m.z_err_mean < 0.3, "z error {}", m.z_err_mean);
 }

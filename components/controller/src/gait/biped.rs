@@ -7,15 +7,18 @@
 //! - the swing foot follows a path from its lift-off point to a SIMBICON foot
 //!   placement (ahead of the centre of mass by velocity, velocity error and an
 //!   integral of the speed error, sideways by the lateral velocity), lifted over the
-//!   local height map, by two-segment leg IK; the path is followed kd/kp ahead, the
-//!   lag of a PD servo behind a moving target;
+//!   local height map, by two-segment leg IK; the path is followed kd/kp ahead (the
+//!   lag of a PD servo behind a moving target) plus the form's `swing_lead` (the leg's
+//!   inertia adds to it); the swing is quicker at higher speed (`step_time_per_speed`);
 //! - legs switch at swing-foot touchdown (the swing foot as low as the stance foot,
 //!   after half a step; 1.5 steps at most); the leg targets' jump at the switch is
 //!   faded out over [`SWITCH_BLEND`];
 //! - the stance leg holds the pelvis height by IK, and its hip adds virtual-torso
 //!   torque from pelvis tilt error realised through the PD targets (offset = torque /
 //!   kp) minus the swing hip's torque (SIMBICON); the stance hip yaw turns the pelvis
-//!   towards the path;
+//!   towards the path; the stance foot's target sits behind the foot by the desired
+//!   speed and the speed error (`stance_push`, `push_err_gain`), so the stance hip
+//!   propels the body;
 //! - a bounded residual root wrench (cap in [`ControllerSettings`]) helps with speed,
 //!   height and tilt; it is part of the action and reported by the metrics.
 
@@ -98,8 +101,16 @@ pub(crate) struct BipedGait {
     foot_bias: f64,
 }
 
-/// Largest change of the desired velocity \[m/s^2\].
-const MAX_ACCEL: f64 = 1.5;
+/// Largest change of the desired velocity \[m/s^2\]. The plan's point moves at full
+/// speed from the first instant: a slow ramp leaves the walker a distance behind that
+/// it then has to catch up (speed^2 / 2a: 1.3 m at 2 m/s with 1.5 m/s^2).
+const MAX_ACCEL: f64 = 2.5;
+
+/// Largest forward speed error the stance push responds to \[m/s\].
+const PUSH_ERR_MAX: f64 = 1.0;
+
+/// Shortest and longest swing duration after the speed adjustment \[s\].
+const STEP_TIME_RANGE: [f64; 2] = [0.2, 0.8];
 
 /// Largest change of the requested head height that selects the form \[m/s\].
 const MAX_HEIGHT_RATE: f64 = 0.5;
@@ -242,6 +253,11 @@ impl BipedGait {
         let dh_max = MAX_HEIGHT_RATE * CONTROL_DT;
         self.h_cmd += (head_des - self.h_cmd).clamp(-dh_max, dh_max);
         let form = self.params.blend(self.h_cmd, speed);
+        // Quicker steps as the commanded speed rises (the rate-limited command, so the
+        // cadence rises with the speed during a start).
+        let step_time = (form.step_time
+            - form.step_time_per_speed * (self.v_cmd[0].max(0.0) - form.speed))
+            .clamp(STEP_TIME_RANGE[0], STEP_TIME_RANGE[1]);
         let pitch_des = form.trunk_pitch + form.lean_per_speed * speed;
         let pelvis_des = form.pelvis_height;
         // Integral speed control: a walker that lags (the engines differ in how far a
@@ -267,8 +283,8 @@ impl BipedGait {
             let clearance = |f: [f64; 3]| obs.root_height + f[2] - Self::ground_at(obs, f[0], f[1]);
             let rest = clearance(feet[self.stance]).min(ANKLE_HEIGHT + 0.03);
             let touchdown =
-                self.phase > 0.5 * form.step_time && clearance(feet[swing]) < rest + TOUCHDOWN;
-            if touchdown || self.phase > 1.5 * form.step_time {
+                self.phase > 0.5 * step_time && clearance(feet[swing]) < rest + TOUCHDOWN;
+            if touchdown || self.phase > 1.5 * step_time {
                 self.stance = swing;
                 self.phase = 0.0;
                 switched = true;
@@ -281,8 +297,8 @@ impl BipedGait {
 
         // Swing foot target (heading frame, relative to the root).
         // The PD servo lags a moving target by kd/kp: follow the path that far ahead.
-        let lead = JOINTS[j.hip[0][1]].kd / self.hip_kp;
-        let s_lin = ((self.phase + lead) / form.step_time).min(1.0);
+        let lead = JOINTS[j.hip[0][1]].kd / self.hip_kp + form.swing_lead;
+        let s_lin = ((self.phase + lead) / step_time).min(1.0);
         let s = s_lin * s_lin * (3.0 - 2.0 * s_lin);
         // Forward placement is measured from the centre of mass (body origins weighted
         // by body mass): a leaning or crouching trunk carries it ahead of the pelvis.
@@ -320,8 +336,11 @@ impl BipedGait {
         // Stance foot target: where it is, with the pelvis at the desired height.
         let st = feet[stance];
         let ground_stance = Self::ground_at(obs, st[0], st[1]);
+        // The stance hip pushes with the desired speed and, while the walker lags,
+        // with the speed error (bounded: a hard shove pitches the trunk over).
+        let push_err = (v_des[0] - vx).clamp(0.0, PUSH_ERR_MAX);
         let stance_target = [
-            st[0] - form.stance_push * v_des[0],
+            st[0] - form.stance_push * v_des[0] - form.push_err_gain * push_err,
             st[1] - form.stance_push * v_des[1],
             -pelvis_des + ground_stance + ANKLE_HEIGHT,
         ];

@@ -56,6 +56,23 @@ pub struct FormParams {
     /// the walker lags) \[1/s\]. Absent in older files: 0.
     #[serde(default)]
     pub speed_ki: f64,
+    /// Swing duration shortened per m/s of commanded speed above the form's `speed`
+    /// (lengthened below it): faster walking takes quicker, not only longer, steps,
+    /// which keeps the touchdown collision loss down \[s^2/m\]. Absent in older
+    /// files: 0.
+    #[serde(default)]
+    pub step_time_per_speed: f64,
+    /// Stance-foot target moved back by this many seconds of forward speed error
+    /// (desired - actual, >= 0): the stance hip pushes harder while the walker lags,
+    /// so the body, not the residual, catches up with the plan \[s\]. Absent in older
+    /// files: 0.
+    #[serde(default)]
+    pub push_err_gain: f64,
+    /// Extra time the swing foot follows its path ahead, beyond the servo's kd/kp: the
+    /// leg's inertia makes it lag further, and a late foot lands short \[s\]. Absent
+    /// in older files: 0.
+    #[serde(default)]
+    pub swing_lead: f64,
 }
 
 impl FormParams {
@@ -86,6 +103,9 @@ impl FormParams {
             stance_push: l(self.stance_push, b.stance_push),
             swing_comp: l(self.swing_comp, b.swing_comp),
             speed_ki: l(self.speed_ki, b.speed_ki),
+            step_time_per_speed: l(self.step_time_per_speed, b.step_time_per_speed),
+            push_err_gain: l(self.push_err_gain, b.push_err_gain),
+            swing_lead: l(self.swing_lead, b.swing_lead),
         }
     }
 
@@ -107,6 +127,15 @@ impl FormParams {
         }
         if !(self.swing_height >= 0.0 && self.swing_height < 0.4) {
             return bad("swing_height", "must be in [0, 0.4) m");
+        }
+        if !(self.step_time_per_speed >= 0.0 && self.step_time_per_speed < 0.5) {
+            return bad("step_time_per_speed", "must be in [0, 0.5) s^2/m");
+        }
+        if !(self.swing_lead >= 0.0 && self.swing_lead < 0.3) {
+            return bad("swing_lead", "must be in [0, 0.3) s");
+        }
+        if !(self.push_err_gain >= 0.0 && self.push_err_gain < 1.0) {
+            return bad("push_err_gain", "must be in [0, 1) s");
         }
         Ok(())
     }
