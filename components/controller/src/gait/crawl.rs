@@ -777,8 +777,8 @@ impl CrawlGait {
                     let vel = [self.v_cmd[0] - yaw_rate * ny, self.v_cmd[1] + yaw_rate * nx];
                     if local < p.duty {
                         self.in_swing[i] = false;
-                        for k in 0..2 {
-                            self.offset[i][k] -= vel[k] * CONTROL_DT;
+                        for (o, v) in self.offset[i].iter_mut().zip(vel) {
+                            *o -= v * CONTROL_DT;
                         }
                     } else {
                         if !self.in_swing[i] {
@@ -787,10 +787,10 @@ impl CrawlGait {
                         }
                         let s_lin = ((local - p.duty) / (1.0 - p.duty)).min(1.0);
                         let s = smoothstep(s_lin + CONTROL_DT / (cycle * (1.0 - p.duty)));
-                        for k in 0..2 {
-                            let land = 0.5 * vel[k] * stance_time;
-                            self.offset[i][k] =
-                                self.lift_off[i][k] + s * (land - self.lift_off[i][k]);
+                        for ((o, v), l) in self.offset[i].iter_mut().zip(vel).zip(self.lift_off[i])
+                        {
+                            let land = 0.5 * v * stance_time;
+                            *o = l + s * (land - l);
                         }
                         let h = if i < 2 { p.knee_lift } else { p.hand_lift };
                         lift[i] = h * (PI * s_lin).sin();
