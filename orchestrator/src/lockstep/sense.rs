@@ -112,7 +112,11 @@ impl AgentTracker {
     pub(crate) fn is_fallen(&self, scene: &Scene, s: &HumanoidState, plan: &PlanMessage) -> bool {
         let h = s.head_position;
         let above = h[2] - scene.height_at(h[0], h[1]);
-        self.settings.is_fallen(above, plan.form_height) || !above.is_finite()
+        // The plan lowers the head below its form's height under low tops (a run leg
+        // crawls through a gap): a head that follows it has not fallen.
+        let w = plan.waypoints[0].position;
+        let requested = plan.form_height.min(w[2] - scene.height_at(w[0], w[1]));
+        self.settings.is_fallen(above, requested) || !above.is_finite()
     }
 
     /// Record the step at `tick` with this tick's plan and the action applied during
