@@ -477,6 +477,11 @@ impl CrawlGait {
         matches!(self.mode, Mode::Up { t, .. } if t >= self.params.up_time)
     }
 
+    /// Whether the crawl is down on hands and knees (not in a transition).
+    pub(crate) fn settled(&self) -> bool {
+        self.mode == Mode::Crawl
+    }
+
     /// Whether the crawl is standing up.
     pub(crate) fn standing_up(&self) -> bool {
         matches!(self.mode, Mode::Up { .. })

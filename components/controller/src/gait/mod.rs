@@ -115,7 +115,7 @@ impl Policy for ModelBasedController {
                 if requested < below {
                     self.crawl.begin_down(obs);
                 }
-            } else if requested > above {
+            } else if requested > above && self.crawl.settled() {
                 self.crawl.begin_up(obs);
             }
         }
