@@ -109,8 +109,9 @@ const MAX_ACCEL: f64 = 2.5;
 /// Largest forward speed error the stance push responds to \[m/s\].
 const PUSH_ERR_MAX: f64 = 1.0;
 
-/// Shortest and longest swing duration after the speed adjustment \[s\].
-const STEP_TIME_RANGE: [f64; 2] = [0.2, 0.8];
+/// The speed adjustment keeps the swing duration within these factors of the form's
+/// `step_time` \[-\].
+const STEP_TIME_RANGE: [f64; 2] = [0.5, 1.5];
 
 /// Largest change of the requested head height that selects the form \[m/s\].
 const MAX_HEIGHT_RATE: f64 = 0.5;
@@ -257,7 +258,10 @@ impl BipedGait {
         // cadence rises with the speed during a start).
         let step_time = (form.step_time
             - form.step_time_per_speed * (self.v_cmd[0].max(0.0) - form.speed))
-            .clamp(STEP_TIME_RANGE[0], STEP_TIME_RANGE[1]);
+            .clamp(
+                STEP_TIME_RANGE[0] * form.step_time,
+                STEP_TIME_RANGE[1] * form.step_time,
+            );
         let pitch_des = form.trunk_pitch + form.lean_per_speed * speed;
         let pelvis_des = form.pelvis_height;
         // Integral speed control: a walker that lags (the engines differ in how far a
@@ -337,7 +341,8 @@ impl BipedGait {
         let st = feet[stance];
         let ground_stance = Self::ground_at(obs, st[0], st[1]);
         // The stance hip pushes with the desired speed and, while the walker lags,
-        // with the speed error (bounded: a hard shove pitches the trunk over).
+        // with the speed error (bounded: a target far behind the foot runs the stance leg
+        // out of reach and the pelvis sinks).
         let push_err = (v_des[0] - vx).clamp(0.0, PUSH_ERR_MAX);
         let stance_target = [
             st[0] - form.stance_push * v_des[0] - form.push_err_gain * push_err,
