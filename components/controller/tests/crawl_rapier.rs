@@ -21,12 +21,28 @@ fn settings() -> ControllerSettings {
 }
 
 fn crawl(path: &dyn HeadPath, duration: f64) -> MetricsSummary {
+    crawl_in(&flat_scene(SPEED * duration + 5.0), path, duration)
+}
+
+/// A flat bench with a 0.6 m ceiling over x in [2.5, 4.5] m (the playground's tunnel
+/// height), 2 m wide.
+fn ceiling_scene(length: f64) -> plamo_scenes::Scene {
+    let mut scene = flat_scene(length);
+    scene.tops.push(plamo_scenes::TopObstacle {
+        name: "tunnel".into(),
+        footprint: plamo_scenes::Footprint::axis_aligned([3.5, 0.0], [1.0, 1.0]),
+        z_bottom: 0.6,
+        z_top: 0.8,
+    });
+    scene
+}
+
+fn crawl_in(scene: &plamo_scenes::Scene, path: &dyn HeadPath, duration: f64) -> MetricsSummary {
     let settings = settings();
     let mut policy = ModelBasedController::new(settings.clone()).unwrap();
-    let scene = flat_scene(SPEED * duration + 5.0);
     let m = run_path(
         BackendKind::Rapier,
-        &scene,
+        scene,
         path,
         duration,
         &mut policy,
@@ -40,9 +56,10 @@ fn crawl(path: &dyn HeadPath, duration: f64) -> MetricsSummary {
 fn check(m: &MetricsSummary, what: &str) {
     assert_eq!(m.falls, 0, "fell {what}");
     // Errors include the first ~2 s, the get-down from a standing start (head 1.47 m).
-    // Measured XY 0.33-0.35 m in rapier (it lags the plan), 0.13-0.15 m in MuJoCo;
-    // Z 0.10-0.12 m in both.
-    assert!(m.xy_err_mean < 0.45, "xy error {} {what}", m.xy_err_mean);
+    // Measured XY 0.37 m straight, 0.46 m on the arc in rapier (it lags the plan; the
+    // lower crawl that clears a 0.6 m ceiling lags more than the 0.33-0.35 m before);
+    // Z 0.10-0.12 m.
+    assert!(m.xy_err_mean < 0.5, "xy error {} {what}", m.xy_err_mean);
     assert!(m.z_err_mean < 0.15, "z error {} {what}", m.z_err_mean);
     // Measured 0.08-0.12 m*g with the shipped parameters.
     assert!(
@@ -168,4 +185,23 @@ fn stands_up_when_the_plan_rises_in_rapier() {
     let head = physics.state().head[2];
     assert!(!policy.is_crawling(), "still in the crawl gait");
     assert!(head > 1.2, "head {head} m after getting up");
+}
+
+#[test]
+fn crawls_under_a_0_6_m_ceiling_in_rapier() {
+    // The back must clear the ceiling: a crawl whose back scrapes it is held by the
+    // friction (the playground's tunnel stopped the taller crawl for 80 s).
+    let path = StraightPath {
+        start: [0.0, 0.0],
+        speed: SPEED,
+        head_height: 0.4,
+    };
+    let m = crawl_in(&ceiling_scene(12.0), &path, 12.0);
+    assert_eq!(m.falls, 0, "fell under the ceiling");
+    // Measured XY 0.64 m (0.94 m with the taller crawl of 24d140b, held by the ceiling).
+    assert!(
+        m.xy_err_mean < 0.75,
+        "xy error {} under the ceiling",
+        m.xy_err_mean
+    );
 }

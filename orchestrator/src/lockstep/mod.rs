@@ -151,7 +151,7 @@ impl Lockstep {
                 &self.plans[k],
                 &self.input.actions[k],
             );
-            self.fallen[k] = fell;
+            self.fallen[k] = fell && AgentTracker::may_reset(&self.scene, &self.world.agents[k]);
         }
         if self.trackers.iter().all(AgentTracker::done) {
             return Ok(StepStatus::Finished);

@@ -58,6 +58,15 @@ struct Track {
     reached_t: Option<f64>,
 }
 
+/// Horizontal distance from a low top within which the fall rule allows the head as
+/// low as the top's headroom \[m\]: a crawl's body reaches ~1 m behind its head, and
+/// the get-down and get-up take 1.5 s each.
+const TOP_GRACE: f64 = 2.0;
+
+/// Horizontal distance from a low top within which a fallen humanoid is not reset
+/// standing \[m\] (a standing body reaches ~0.3 m from its root).
+const RESET_CLEARANCE: f64 = 0.4;
+
 fn residual(a: &AgentAction) -> Option<RootWrench> {
     let w = a.root_wrench;
     (w != [0.0; 6]).then_some(RootWrench {
@@ -115,8 +124,35 @@ impl AgentTracker {
         // The plan lowers the head below its form's height under low tops (a run leg
         // crawls through a gap): a head that follows it has not fallen.
         let w = plan.waypoints[0].position;
-        let requested = plan.form_height.min(w[2] - scene.height_at(w[0], w[1]));
+        // Nor has a humanoid near a low top whose plan's height moved on faster than a
+        // body can get down or up (the plan also runs ahead of a slow crawl): the
+        // headroom of tops within `TOP_GRACE` of the root caps the height, so the fall
+        // rule does not stand a crawler up inside a top.
+        let r = s.root_position;
+        let ground = scene.height_at(r[0], r[1]);
+        let headroom = scene
+            .tops
+            .iter()
+            .filter(|t| t.footprint.signed_distance(r[0], r[1]) < TOP_GRACE)
+            .map(|t| t.z_bottom - ground)
+            .fold(f64::INFINITY, f64::min);
+        let requested = plan
+            .form_height
+            .min(w[2] - scene.height_at(w[0], w[1]))
+            .min(headroom);
         self.settings.is_fallen(above, requested) || !above.is_finite()
+    }
+
+    /// Whether physics may stand the fallen humanoid up where it is: not under or
+    /// beside a top lower than a standing body, where a reset would put the body inside
+    /// the top (it then stays stuck there); such a humanoid carries on from the ground.
+    pub(crate) fn may_reset(scene: &Scene, s: &HumanoidState) -> bool {
+        let r = s.root_position;
+        let ground = scene.height_at(r[0], r[1]);
+        !scene.tops.iter().any(|t| {
+            t.footprint.signed_distance(r[0], r[1]) < RESET_CLEARANCE
+                && t.z_bottom - ground < plamo_physics::humanoid::STANDING_HEAD_HEIGHT + 0.1
+        })
     }
 
     /// Record the step at `tick` with this tick's plan and the action applied during

@@ -18,11 +18,23 @@ pub use params::{DEFAULT_GAIT_PARAMS, FormParams, GAIT_PARAMS_VERSION, GaitParam
 use plamo_physics::{NUM_BODIES, NUM_JOINTS};
 
 use crate::error::{ControllerError, Result};
-use crate::observation::{Observation, ObservationLayout};
+use crate::observation::{Observation, ObservationLayout, WAYPOINT_SPACING};
 use crate::policy::{Action, Policy, RootWrench};
 use crate::settings::ControllerSettings;
 use biped::BipedGait;
 use crawl::CrawlGait;
+
+/// How far a crawler may lag behind its plan and still stand up when the plan rises
+/// \[m\]: a plan that ran ahead of a slow crawl may rise past a low ceiling the body
+/// is still under (replans bring the plan back to the body).
+const MAX_STAND_LAG: f64 = 0.6;
+
+/// Distance from the head to the plan's first waypoint beyond what the plan's own
+/// speed puts there \[m\].
+fn plan_lead(obs: &Observation) -> f64 {
+    let w = obs.waypoints[0];
+    w[0].hypot(w[1]) - WAYPOINT_SPACING * obs.waypoint_speeds[0].max(0.0)
+}
 
 /// The model-based controller (see the module docs).
 #[derive(Debug, Clone)]
@@ -115,7 +127,7 @@ impl Policy for ModelBasedController {
                 if requested < below {
                     self.crawl.begin_down(obs);
                 }
-            } else if requested > above && self.crawl.settled() {
+            } else if requested > above && self.crawl.settled() && plan_lead(obs) < MAX_STAND_LAG {
                 self.crawl.begin_up(obs);
             }
         }
