@@ -1,15 +1,16 @@
 //! Closed loop in MuJoCo: from standing, the default controller gets down on hands and
-//! knees when the plan asks for a 0.4 m head and crawls a straight path and an arc
-//! without falling; bit-identical reruns. (Getting up again works in rapier, see
-//! crawl_rapier.rs; in MuJoCo the sit-back into the squat does not get the feet under
-//! the body yet, see RESULTS.md "## Crawl".)
+//! knees when the plan asks for a 0.4 m head, crawls a straight path, an arc and under
+//! a 0.6 m ceiling without falling, and stands up again when the plan rises;
+//! bit-identical reruns.
 #![cfg(feature = "mujoco")]
 
 use plamo_controller::{
-    ArcPath, ControllerSettings, HeadPath, MetricsSummary, ModelBasedController, StraightPath,
-    flat_scene, run_path,
+    Action, ArcPath, ControllerSettings, HeadPath, HumanoidSnapshot, MetricsSummary,
+    ModelBasedController, NUM_WAYPOINTS, Observation, Policy, StraightPath, WAYPOINT_SPACING,
+    Waypoint, flat_scene, run_path,
 };
-use plamo_physics::BackendKind;
+use plamo_physics::{BackendKind, HumanoidPose, PhysicsSettings, create_backend};
+use plamo_scenes::Scene;
 
 /// The crawl speed the gait follows closely (it lags beyond ~0.75 m/s).
 const SPEED: f64 = 0.5;
@@ -129,4 +130,81 @@ fn crawls_under_a_0_6_m_ceiling_in_mujoco() {
         "xy error {} under the ceiling",
         m.xy_err_mean
     );
+}
+
+/// A straight crawl whose plan rises to standing at `up_at`.
+struct UpDown {
+    line: StraightPath,
+    up_at: f64,
+}
+
+impl HeadPath for UpDown {
+    fn point(&self, scene: &Scene, t: f64) -> Waypoint {
+        let mut w = self.line.at(scene, t);
+        if t >= self.up_at {
+            w.z += 1.47 - self.line.head_height;
+        }
+        w
+    }
+    fn direction(&self, _t: f64) -> [f64; 2] {
+        [1.0, 0.0]
+    }
+    fn head_height(&self) -> f64 {
+        self.line.head_height
+    }
+}
+
+#[test]
+fn stands_up_when_the_plan_rises_in_mujoco() {
+    let path = UpDown {
+        line: StraightPath {
+            start: [0.0, 0.0],
+            speed: SPEED,
+            head_height: 0.4,
+        },
+        up_at: 5.0,
+    };
+    let scene = flat_scene(10.0);
+    let mut physics =
+        create_backend(BackendKind::Mujoco, &scene, &PhysicsSettings::default()).unwrap();
+    physics
+        .reset(&HumanoidPose::standing_on(&scene.terrain, 0.0, 0.0, 0.0))
+        .unwrap();
+    let mut policy = ModelBasedController::new(settings()).unwrap();
+    let mut obs = Observation::new(ModelBasedController::LAYOUT);
+    let mut action = Action::zeros(ModelBasedController::LAYOUT.num_joints);
+    let mut plan = [Waypoint::default(); NUM_WAYPOINTS];
+    let mut crawled = false;
+    for c in 0..(9 * 30) {
+        let t = c as f64 / 30.0;
+        let state = physics.state().clone();
+        if (3.5..4.5).contains(&t) {
+            assert!(
+                state.head[2] < 0.6,
+                "head {} m at {t} s: not crawling",
+                state.head[2]
+            );
+            crawled |= policy.is_crawling();
+        }
+        for (i, w) in plan.iter_mut().enumerate() {
+            *w = path.point(&scene, t + WAYPOINT_SPACING * (i + 1) as f64);
+        }
+        obs.update(&HumanoidSnapshot::from(&state), &plan, &scene)
+            .unwrap();
+        policy.act(&obs, &mut action).unwrap();
+        physics
+            .set_action(
+                &action.pd_targets,
+                action.root_wrench.map(|w| plamo_physics::RootWrench {
+                    force: w.force,
+                    torque: w.torque,
+                }),
+            )
+            .unwrap();
+        physics.step_n(4).unwrap();
+    }
+    assert!(crawled);
+    let head = physics.state().head[2];
+    assert!(!policy.is_crawling(), "still in the crawl gait");
+    assert!(head > 1.2, "head {head} m after getting up");
 }

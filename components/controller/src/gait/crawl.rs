@@ -121,6 +121,11 @@ pub struct CrawlParams {
     pub squat_shoulder: f64,
     /// Squat elbow \[rad\].
     pub squat_elbow: f64,
+    /// Hip pitch of the squat on the way up \[rad\] (deeper than the get-down's, so the
+    /// pelvis sits back over the feet before the legs straighten).
+    pub up_squat_hip: f64,
+    /// Knee of the squat on the way up \[rad\].
+    pub up_squat_knee: f64,
     /// Residual force per m/s of velocity error, per kg \[1/s\].
     pub vel_gain: f64,
     /// Residual force per m of pelvis height error, per kg \[1/s^2\].
@@ -177,7 +182,9 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 39] = [
+        let ranges: [(&'static str, f64, f64, f64); 41] = [
+            ("up_squat_hip", self.up_squat_hip, -2.4, 0.6),
+            ("up_squat_knee", self.up_squat_knee, 0.0, 2.7),
             ("sit_back_speed", self.sit_back_speed, 0.0, 2.0),
             ("hand_load", self.hand_load, 0.0, 1.0),
             ("attitude_gain", self.attitude_gain, 0.0, 10.0),
@@ -631,13 +638,13 @@ impl CrawlGait {
         targets[j.neck_y] = p.neck_pitch;
     }
 
-    /// The squat both transitions pass through.
-    fn squat(&self) -> [f64; NUM_JOINTS] {
+    /// The squat the transitions pass through (`up`: the get-up's).
+    fn squat(&self, up: bool) -> [f64; NUM_JOINTS] {
         let (p, j) = (&self.params, &self.joints);
         let mut q = [0.0; NUM_JOINTS];
         for side in 0..2 {
-            q[j.hip[side][1]] = p.squat_hip;
-            q[j.knee[side]] = p.squat_knee;
+            q[j.hip[side][1]] = if up { p.up_squat_hip } else { p.squat_hip };
+            q[j.knee[side]] = if up { p.up_squat_knee } else { p.squat_knee };
             q[j.ankle[side][0]] = p.squat_ankle;
             q[j.shoulder[side][1]] = p.squat_shoulder;
             q[j.elbow[side]] = p.squat_elbow;
@@ -649,12 +656,13 @@ impl CrawlGait {
     /// Joint targets `from` -> squat -> `to` at time share `u` in [0, 1].
     fn through_squat(
         &self,
+        up: bool,
         from: &[f64; NUM_JOINTS],
         to: &[f64; NUM_JOINTS],
         u: f64,
         out: &mut [f64],
     ) {
-        let squat = self.squat();
+        let squat = self.squat(up);
         let share = self.params.squat_share;
         let (a, b, s) = if u < share {
             (from, &squat, smoothstep(u / share))
@@ -716,7 +724,7 @@ impl CrawlGait {
                 let mut crawl = [0.0; NUM_JOINTS];
                 let contacts = self.grounded(obs, &nominal);
                 self.pose_targets(&f, &contacts, [0.0; 2], &mut crawl);
-                self.through_squat(&self.from, &crawl, t / p.down_time, targets);
+                self.through_squat(false, &self.from, &crawl, t / p.down_time, targets);
                 let t = t + CONTROL_DT;
                 self.mode = if t >= p.down_time {
                     Mode::Crawl
@@ -739,7 +747,7 @@ impl CrawlGait {
                     stand[j.knee[leg]] = STAND[1];
                     stand[j.ankle[leg][0]] = STAND[2];
                 }
-                self.through_squat(&self.from, &stand, t / p.up_time, targets);
+                self.through_squat(true, &self.from, &stand, t / p.up_time, targets);
                 self.mode = Mode::Up {
                     t: t + CONTROL_DT,
                     pitch0,
