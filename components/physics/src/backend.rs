@@ -74,8 +74,9 @@ impl FromStr for BackendKind {
 ///   length are errors and leave the previous action in place.
 /// - A PD target means the same joint angle in both backends (see [`crate::humanoid`]).
 /// - The same inputs give bit-identical states, run after run.
-/// - A non-finite state after a step is [`PhysicsError::Diverged`]; the world then
-///   refuses to step until every humanoid is reset.
+/// - A state no humanoid can have after a step (non-finite or impossibly fast,
+///   [`crate::HumanoidState::unphysical`]) is [`PhysicsError::Diverged`]; the world
+///   then refuses to step until every humanoid is reset.
 pub trait PhysicsBackend: Send {
     /// Which engine this is.
     fn kind(&self) -> BackendKind;

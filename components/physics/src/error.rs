@@ -53,8 +53,9 @@ pub enum PhysicsError {
         /// Humanoids in the world.
         count: usize,
     },
-    /// The simulation produced a non-finite state (or the engine failed inside a
-    /// step). The backend refuses to step until `reset`.
+    /// The simulation produced a state no humanoid can have (non-finite, or moving
+    /// impossibly fast: [`crate::HumanoidState::unphysical`]), or the engine failed
+    /// inside a step. The backend refuses to step until `reset`.
     #[error("{backend} simulation diverged at tick {tick}: {reason}")]
     Diverged {
         /// Backend.

@@ -71,4 +71,6 @@ pub use humanoid::{
 pub use mujoco::{MujocoBackend, humanoid_mjcf};
 pub use rapier::RapierBackend;
 pub use settings::PhysicsSettings;
-pub use state::{HumanoidPose, HumanoidState, RootWrench};
+pub use state::{
+    HumanoidPose, HumanoidState, MAX_JOINT_SPEED, MAX_ROOT_SPEED, MAX_ROOT_SPIN, RootWrench,
+};

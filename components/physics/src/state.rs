@@ -107,6 +107,17 @@ impl Default for HumanoidState {
     }
 }
 
+/// Fastest root a humanoid state may have before it counts as a blow-up \[m/s\]
+/// (a 100 m fall reaches 44 m/s).
+pub const MAX_ROOT_SPEED: f64 = 50.0;
+
+/// Fastest root rotation before a state counts as a blow-up \[rad/s\].
+pub const MAX_ROOT_SPIN: f64 = 100.0;
+
+/// Fastest joint before a state counts as a blow-up \[rad/s\] (servo-driven joints
+/// stay near 10).
+pub const MAX_JOINT_SPEED: f64 = 200.0;
+
 impl HumanoidState {
     /// Whether every number is finite.
     pub fn is_finite(&self) -> bool {
@@ -120,6 +131,42 @@ impl HumanoidState {
             .chain(&self.joint_vel)
             .chain(self.body_pos.iter().flatten())
             .all(|v| v.is_finite())
+    }
+
+    /// Why this state cannot be a humanoid's (a solver blow-up), if it cannot: a
+    /// non-finite number, or a root or joint moving faster than any humanoid does
+    /// ([`MAX_ROOT_SPEED`], [`MAX_ROOT_SPIN`], [`MAX_JOINT_SPEED`]). A blow-up can
+    /// stay finite (rapier has flung a crawling humanoid to 1e12 m), so finiteness
+    /// alone is not enough.
+    pub fn unphysical(&self) -> Option<String> {
+        if !self.is_finite() {
+            return Some("non-finite state".into());
+        }
+        let norm = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let speed = norm(&self.root_linvel);
+        if speed > MAX_ROOT_SPEED {
+            return Some(format!(
+                "root speed {speed:.3e} m/s (a humanoid stays under {MAX_ROOT_SPEED} m/s)"
+            ));
+        }
+        let spin = norm(&self.root_angvel);
+        if spin > MAX_ROOT_SPIN {
+            return Some(format!(
+                "root spin {spin:.3e} rad/s (a humanoid stays under {MAX_ROOT_SPIN} rad/s)"
+            ));
+        }
+        if let Some((j, v)) = self
+            .joint_vel
+            .iter()
+            .enumerate()
+            .find(|(_, v)| v.abs() > MAX_JOINT_SPEED)
+        {
+            return Some(format!(
+                "joint `{}` at {v:.3e} rad/s (a humanoid stays under {MAX_JOINT_SPEED} rad/s)",
+                crate::JOINT_NAMES[j]
+            ));
+        }
+        None
     }
 
     /// Heading of the pelvis: yaw of its forward (+X) axis \[rad\].
@@ -190,4 +237,29 @@ pub(crate) fn sanitize_action(
             torque: math::clamp_norm(w.torque, max_torque),
         },
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blow_ups_are_unphysical_even_when_finite() {
+        let rest = HumanoidState::default();
+        assert_eq!(rest.unphysical(), None);
+        let mut flung = rest.clone();
+        flung.root_linvel = [-1.07e9, 8.3e8, 4.3e8];
+        let why = flung.unphysical().unwrap();
+        assert!(why.contains("root speed"), "{why}");
+        let mut spun = rest.clone();
+        spun.root_angvel = [0.0, 0.0, 150.0];
+        assert!(spun.unphysical().unwrap().contains("root spin"));
+        let mut joint = rest.clone();
+        joint.joint_vel[3] = -4.3e17;
+        let why = joint.unphysical().unwrap();
+        assert!(why.contains(crate::JOINT_NAMES[3]), "{why}");
+        let mut nan = rest;
+        nan.head[2] = f64::NAN;
+        assert_eq!(nan.unphysical().as_deref(), Some("non-finite state"));
+    }
 }

@@ -318,14 +318,23 @@ impl PhysicsBackend for MujocoBackend {
         let mujoco_reset = warnings != self.bad_qacc_warnings;
         self.bad_qacc_warnings = warnings;
         self.read_states(true);
-        let bad = (0..self.layouts.len()).find(|&i| mujoco_reset || !self.states[i].is_finite());
+        let bad = (0..self.layouts.len()).find_map(|i| {
+            if mujoco_reset {
+                Some((
+                    i,
+                    "MuJoCo reset the data after a bad acceleration".to_string(),
+                ))
+            } else {
+                self.states[i].unphysical().map(|why| (i, why))
+            }
+        });
         match bad {
-            Some(i) => {
+            Some((i, why)) => {
                 self.diverged.iter_mut().for_each(|d| *d = true);
                 Err(PhysicsError::diverged(
                     BackendKind::Mujoco,
                     self.tick,
-                    format!("humanoid {i}: non-finite state (MuJoCo reset: {mujoco_reset})"),
+                    format!("humanoid {i}: {why}"),
                 ))
             }
             None => Ok(()),

@@ -160,16 +160,21 @@ impl PhysicsBackend for RapierBackend {
         let mut bad = None;
         for i in 0..self.humanoids.len() {
             self.read_state(i);
-            if quarantined || !self.states[i].is_finite() {
+            let why = if quarantined {
+                Some("rapier quarantined a body".to_string())
+            } else {
+                self.states[i].unphysical()
+            };
+            if let Some(why) = why {
                 self.diverged[i] = true;
-                bad.get_or_insert(i);
+                bad.get_or_insert((i, why));
             }
         }
         match bad {
-            Some(i) => Err(PhysicsError::diverged(
+            Some((i, why)) => Err(PhysicsError::diverged(
                 BackendKind::Rapier,
                 self.tick,
-                format!("humanoid {i} has a non-finite state"),
+                format!("humanoid {i}: {why}"),
             )),
             None => Ok(()),
         }
