@@ -449,6 +449,10 @@ pub(crate) struct CrawlGait {
     last_wrench: RootWrench,
 }
 
+/// Largest heading error the residual yaw torque turns towards while getting down or
+/// up \[rad\].
+const TRANSITION_YAW_ERR: f64 = 0.2;
+
 /// Standing pose the get-up blends into \[rad\] (hip, knee, ankle pitch).
 const STAND: [f64; 3] = [-0.1, 0.2, -0.1];
 
@@ -841,7 +845,14 @@ impl CrawlGait {
             }
         };
 
-        // Bounded residual root wrench, heading frame then world.
+        // Bounded residual root wrench, heading frame then world. Getting down or up,
+        // the feet stay planted: a yaw torque towards a plan far off the body's heading
+        // (after a reset) only twists the body over them, so only small errors count.
+        let yaw_err = if self.mode == Mode::Crawl {
+            heading_err
+        } else {
+            heading_err.clamp(-TRANSITION_YAW_ERR, TRANSITION_YAW_ERR)
+        };
         let m = self.settings.body_mass;
         let force = clamp_norm(
             [
@@ -856,7 +867,7 @@ impl CrawlGait {
             [
                 -(p.rot_gain * roll + p.rot_damping * wx),
                 -(p.rot_gain * (pitch - pitch_des) + p.rot_damping * wy),
-                p.yaw_torque_gain * heading_err + p.rot_damping * (yaw_rate - wz),
+                p.yaw_torque_gain * yaw_err + p.rot_damping * (yaw_rate - wz),
             ],
             self.settings.residual_torque_cap,
         );
