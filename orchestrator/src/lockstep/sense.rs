@@ -242,3 +242,36 @@ impl AgentTracker {
             .collect()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn low_tops_cap_the_fall_height_and_block_the_standing_reset() {
+        let scene = plamo_scenes::builtin("playground").unwrap();
+        let tracker = AgentTracker::new(1, ControllerSettings::default());
+        let mut plan = PlanMessage {
+            form_height: 1.47,
+            ..Default::default()
+        };
+        let mut s = HumanoidState::default();
+        // Under the 0.6 m tunnel (x 7-11, y 19.6-21.2), 0.2 m beside it, and in the open
+        // by the fountain: a crawler (head 0.35 m) whose plan already rose to standing.
+        for ([x, y], under) in [
+            ([9.5, 20.4], true),
+            ([9.5, 19.4], true),
+            ([4.0, 11.0], false),
+        ] {
+            s.root_position = [x, y, 0.45];
+            s.head_position = [x + 0.4, y, 0.35];
+            plan.waypoints[0].position = [x + 1.0, y, 1.47];
+            assert_eq!(tracker.is_fallen(&scene, &s, &plan), !under, "({x}, {y})");
+            assert_eq!(AgentTracker::may_reset(&scene, &s), !under, "({x}, {y})");
+        }
+        // Under the tunnel a head on the ground is still a fall.
+        s.root_position = [9.5, 20.4, 0.2];
+        s.head_position = [9.9, 20.4, 0.1];
+        assert!(tracker.is_fallen(&scene, &s, &plan));
+    }
+}
