@@ -1,5 +1,7 @@
 //! One controller step: observation build (incl. the 8x8 height map query) plus the
-//! model-based policy, from a real standing humanoid state (rapier).
+//! model-based policy, from a real standing humanoid state (rapier): walking (the biped
+//! gait) and asked to crawl (the four-limb gait: getting down, then crawling, as the
+//! repeated steps advance its phase).
 
 use std::hint::black_box;
 
@@ -19,25 +21,30 @@ fn step(c: &mut Criterion) {
         .unwrap();
     physics.step_n(8).unwrap();
     let snap = HumanoidSnapshot::from(physics.state());
-    let path = StraightPath {
-        start: [0.0, 0.0],
-        speed: 1.0,
-        head_height: 1.47,
-    };
-    let plan: Vec<_> = (1..=NUM_WAYPOINTS)
-        .map(|i| path.at(&scene, 0.5 * i as f64))
-        .collect();
-    let mut policy = ModelBasedController::new(ControllerSettings::default()).unwrap();
     let mut obs = Observation::new(ModelBasedController::LAYOUT);
     let mut action = Action::default();
-    c.bench_function("controller_step_model_based", |b| {
-        b.iter(|| {
-            obs.update(black_box(&snap), black_box(&plan), &scene)
-                .unwrap();
-            policy.act(&obs, &mut action).unwrap();
-            black_box(&action);
-        })
-    });
+    for (name, head_height, speed) in [
+        ("controller_step_model_based", 1.47, 1.0),
+        ("controller_step_model_based_crawl", 0.4, 0.5),
+    ] {
+        let path = StraightPath {
+            start: [0.0, 0.0],
+            speed,
+            head_height,
+        };
+        let plan: Vec<_> = (1..=NUM_WAYPOINTS)
+            .map(|i| path.at(&scene, 0.5 * i as f64))
+            .collect();
+        let mut policy = ModelBasedController::new(ControllerSettings::default()).unwrap();
+        c.bench_function(name, |b| {
+            b.iter(|| {
+                obs.update(black_box(&snap), black_box(&plan), &scene)
+                    .unwrap();
+                policy.act(&obs, &mut action).unwrap();
+                black_box(&action);
+            })
+        });
+    }
     let mut flat = vec![0.0f32; ModelBasedController::LAYOUT.len()];
     c.bench_function("observation_flatten", |b| {
         b.iter(|| obs.flatten_into(black_box(&mut flat)).unwrap())
