@@ -60,6 +60,21 @@ pub(crate) fn norm3(v: [f64; 3]) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
 
+/// `a - b`.
+pub(crate) fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// `v` scaled down to length `max` if longer.
+pub(crate) fn clamp_norm(v: [f64; 3], max: f64) -> [f64; 3] {
+    let n = norm3(v);
+    if n > max && n > 0.0 {
+        v.map(|x| x * max / n)
+    } else {
+        v
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -30,10 +30,11 @@ use plamo_physics::humanoid::{BODIES, JOINTS, joint_index, shape_mass};
 use plamo_physics::{FEET, NUM_BODIES, NUM_JOINTS};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
-use crate::math::{from_heading_frame, wrap_angle};
+use super::residual_wrench;
+use crate::math::{clamp_norm, sub3, wrap_angle};
 use crate::observation::{Observation, WAYPOINT_SPACING};
 use crate::policy::{Action, RootWrench};
-use crate::settings::{ControllerSettings, GRAVITY};
+use crate::settings::ControllerSettings;
 
 /// Height of the ankle (foot body origin) above the sole \[m\].
 const ANKLE_HEIGHT: f64 = 0.07;
@@ -184,21 +185,8 @@ impl BipedGait {
     }
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn clamp_norm(v: [f64; 3], max: f64) -> [f64; 3] {
-    let n = dot(v, v).sqrt();
-    if n > max && n > 0.0 {
-        v.map(|x| x * max / n)
-    } else {
-        v
-    }
 }
 
 impl BipedGait {
@@ -279,7 +267,7 @@ impl BipedGait {
             self.stance = if vy > 0.0 { 1 } else { 0 };
             self.phase = 0.0;
             let sw = 1 - self.stance;
-            self.swing_start_rel_stance = sub(feet[sw], feet[self.stance]);
+            self.swing_start_rel_stance = sub3(feet[sw], feet[self.stance]);
         } else {
             self.phase += CONTROL_DT;
             // Clearance relative to the stance foot's: the ankle's resting height
@@ -292,7 +280,7 @@ impl BipedGait {
                 self.stance = swing;
                 self.phase = 0.0;
                 switched = true;
-                self.swing_start_rel_stance = sub(feet[1 - self.stance], feet[self.stance]);
+                self.swing_start_rel_stance = sub3(feet[1 - self.stance], feet[self.stance]);
             }
         }
         let stance = self.stance;
@@ -360,7 +348,7 @@ impl BipedGait {
                 fwd[1] * o[0] + left[1] * o[1] + up[1] * o[2],
                 fwd[2] * o[0] + left[2] * o[1] + up[2] * o[2],
             ];
-            let rel = sub(target, hip);
+            let rel = sub3(target, hip);
             let p = [dot(rel, fwd), dot(rel, left), dot(rel, up)];
             let [hx_ik, hy_ik, knee] = leg_ik(&self.legs, p);
             let (mut hx, mut hy, mut hz) = (hx_ik, hy_ik, 0.0);
@@ -418,34 +406,17 @@ impl BipedGait {
         // Bounded residual root wrench, heading frame then world.
         let m = self.settings.body_mass;
         let g = &self.params.residual;
-        let force = clamp_norm(
-            [
-                m * g.vel_gain * (v_des[0] - vx),
-                m * g.vel_gain * (v_des[1] - vy),
-                (m * (g.height_gain * (pelvis_des - obs.root_height) - g.height_damping * vz))
-                    .max(0.0),
-            ],
-            self.settings.residual_force_cap * m * GRAVITY,
-        );
-        let torque = clamp_norm(
-            [
-                -(g.rot_gain * roll + g.rot_damping * wx),
-                -(g.rot_gain * (pitch - pitch_des) + g.rot_damping * wy),
-                g.rot_gain * 0.2 * heading_err - g.rot_damping * wz,
-            ],
-            self.settings.residual_torque_cap,
-        );
-        let wrench = RootWrench {
-            force: from_heading_frame(obs.heading, force),
-            torque: from_heading_frame(obs.heading, torque),
-        };
-        self.last_wrench = wrench;
-        out.root_wrench =
-            if self.settings.residual_force_cap > 0.0 || self.settings.residual_torque_cap > 0.0 {
-                Some(wrench)
-            } else {
-                None
-            };
+        let force = [
+            m * g.vel_gain * (v_des[0] - vx),
+            m * g.vel_gain * (v_des[1] - vy),
+            (m * (g.height_gain * (pelvis_des - obs.root_height) - g.height_damping * vz)).max(0.0),
+        ];
+        let torque = [
+            -(g.rot_gain * roll + g.rot_damping * wx),
+            -(g.rot_gain * (pitch - pitch_des) + g.rot_damping * wy),
+            g.rot_gain * 0.2 * heading_err - g.rot_damping * wz,
+        ];
+        self.last_wrench = residual_wrench(&self.settings, obs.heading, force, torque, out);
     }
 
     pub(crate) fn reset(&mut self) {

@@ -29,8 +29,9 @@ use plamo_physics::NUM_JOINTS;
 use plamo_physics::humanoid::{BODIES, JOINTS, body_index, joint_index};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
+use super::residual_wrench;
 use crate::error::{ControllerError, Result};
-use crate::math::{from_heading_frame, wrap_angle};
+use crate::math::{sub3, wrap_angle};
 use crate::observation::{Observation, WAYPOINT_SPACING};
 use crate::policy::{Action, RootWrench};
 use crate::settings::{ControllerSettings, GRAVITY};
@@ -350,19 +351,6 @@ fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn clamp_norm(v: [f64; 3], max: f64) -> [f64; 3] {
-    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    if n > max && n > 0.0 {
-        v.map(|x| x * max / n)
-    } else {
-        v
-    }
-}
-
 fn smoothstep(s: f64) -> f64 {
     let s = s.clamp(0.0, 1.0);
     s * s * (3.0 - 2.0 * s)
@@ -604,7 +592,7 @@ impl CrawlGait {
         let p = &self.params;
         for leg in 0..2 {
             let knee = contacts[leg];
-            let rel = sub([knee[0], knee[1], knee[2] - f.pelvis_height], f.hip[leg]);
+            let rel = sub3([knee[0], knee[1], knee[2] - f.pelvis_height], f.hip[leg]);
             let q = limb_ik(g.thigh, 0.0, 1.0, false, rot_y(-f.pelvis_pitch, rel));
             // Shin back along the ground, its foot end lifted by `shin_lift`.
             let thigh_pitch = f.pelvis_pitch + q[1];
@@ -617,7 +605,7 @@ impl CrawlGait {
         }
         for arm in 0..2 {
             let hand = contacts[2 + arm];
-            let rel = sub(
+            let rel = sub3(
                 [hand[0], hand[1], hand[2] - f.pelvis_height],
                 f.shoulder[arm],
             );
@@ -636,7 +624,7 @@ impl CrawlGait {
             targets[j.shoulder[arm][0]] = q[0];
             targets[sh] = q[1] + hold(sh, local);
             targets[j.shoulder[arm][2]] = 0.0;
-            targets[j.elbow[arm]] = q[2] + hold(j.elbow[arm], sub(local, elbow));
+            targets[j.elbow[arm]] = q[2] + hold(j.elbow[arm], sub3(local, elbow));
         }
         targets[j.spine_y] = p.spine_pitch;
         targets[j.neck_y] = p.neck_pitch;
@@ -854,34 +842,17 @@ impl CrawlGait {
             heading_err.clamp(-TRANSITION_YAW_ERR, TRANSITION_YAW_ERR)
         };
         let m = self.settings.body_mass;
-        let force = clamp_norm(
-            [
-                m * p.vel_gain * (v_des[0] - vx),
-                m * p.vel_gain * (v_des[1] - vy),
-                (m * (p.height_gain * (height_des - obs.root_height) - p.height_damping * vz))
-                    .max(0.0),
-            ],
-            self.settings.residual_force_cap * m * GRAVITY,
-        );
-        let torque = clamp_norm(
-            [
-                -(p.rot_gain * roll + p.rot_damping * wx),
-                -(p.rot_gain * (pitch - pitch_des) + p.rot_damping * wy),
-                p.yaw_torque_gain * yaw_err + p.rot_damping * (yaw_rate - wz),
-            ],
-            self.settings.residual_torque_cap,
-        );
-        let wrench = RootWrench {
-            force: from_heading_frame(obs.heading, force),
-            torque: from_heading_frame(obs.heading, torque),
-        };
-        self.last_wrench = wrench;
-        out.root_wrench =
-            if self.settings.residual_force_cap > 0.0 || self.settings.residual_torque_cap > 0.0 {
-                Some(wrench)
-            } else {
-                None
-            };
+        let force = [
+            m * p.vel_gain * (v_des[0] - vx),
+            m * p.vel_gain * (v_des[1] - vy),
+            (m * (p.height_gain * (height_des - obs.root_height) - p.height_damping * vz)).max(0.0),
+        ];
+        let torque = [
+            -(p.rot_gain * roll + p.rot_damping * wx),
+            -(p.rot_gain * (pitch - pitch_des) + p.rot_damping * wy),
+            p.yaw_torque_gain * yaw_err + p.rot_damping * (yaw_rate - wz),
+        ];
+        self.last_wrench = residual_wrench(&self.settings, obs.heading, force, torque, out);
     }
 
     /// Back to crawling from rest (used when the controller is reset).

@@ -18,9 +18,10 @@ pub use params::{DEFAULT_GAIT_PARAMS, FormParams, GAIT_PARAMS_VERSION, GaitParam
 use plamo_physics::{NUM_BODIES, NUM_JOINTS};
 
 use crate::error::{ControllerError, Result};
+use crate::math::{clamp_norm, from_heading_frame};
 use crate::observation::{Observation, ObservationLayout, WAYPOINT_SPACING};
 use crate::policy::{Action, Policy, RootWrench};
-use crate::settings::ControllerSettings;
+use crate::settings::{ControllerSettings, GRAVITY};
 use biped::BipedGait;
 use crawl::CrawlGait;
 
@@ -34,6 +35,28 @@ const MAX_STAND_LAG: f64 = 0.6;
 fn plan_lead(obs: &Observation) -> f64 {
     let w = obs.waypoints[0];
     w[0].hypot(w[1]) - WAYPOINT_SPACING * obs.waypoint_speeds[0].max(0.0)
+}
+
+/// The bounded residual root wrench of a gait's step: `force` \[N\] and `torque`
+/// \[N m\] in the heading frame, each clamped to its cap in `settings`, turned into
+/// the world frame. It goes into the action only when a cap is non-zero.
+fn residual_wrench(
+    settings: &ControllerSettings,
+    heading: f64,
+    force: [f64; 3],
+    torque: [f64; 3],
+    out: &mut Action,
+) -> RootWrench {
+    let m = settings.body_mass;
+    let force = clamp_norm(force, settings.residual_force_cap * m * GRAVITY);
+    let torque = clamp_norm(torque, settings.residual_torque_cap);
+    let wrench = RootWrench {
+        force: from_heading_frame(heading, force),
+        torque: from_heading_frame(heading, torque),
+    };
+    out.root_wrench =
+        (settings.residual_force_cap > 0.0 || settings.residual_torque_cap > 0.0).then_some(wrench);
+    wrench
 }
 
 /// The model-based controller (see the module docs).
