@@ -121,9 +121,7 @@ fn trace(
     duration: f64,
     settings: &ControllerSettings,
 ) -> Result<(), Box<dyn Error>> {
-    use plamo_controller::{
-        Action, HumanoidSnapshot, NUM_WAYPOINTS, Observation, Policy, WAYPOINT_SPACING, Waypoint,
-    };
+    use plamo_controller::{Action, Observation, RisingPath, control_step};
     use plamo_physics::{HumanoidPose, PhysicsSettings, create_backend};
     let crawl = match std::env::var_os("PLAMO_CRAWL_PARAMS") {
         Some(p) => CrawlParams::load(std::path::Path::new(&p))?,
@@ -144,7 +142,7 @@ fn trace(
         origin[0] + 0.37 * r as f64,
         origin[1] + 0.1 * (r % 3) as f64 - 0.1,
     ];
-    let path = UpDownPath {
+    let path = RisingPath {
         line: StraightPath {
             start,
             speed,
@@ -164,16 +162,21 @@ fn trace(
     ))?;
     let mut obs = Observation::new(ModelBasedController::LAYOUT);
     let mut action = Action::zeros(ModelBasedController::LAYOUT.num_joints);
-    let mut plan = [Waypoint::default(); NUM_WAYPOINTS];
     let steps = (duration * 30.0) as usize;
     for c in 0..steps {
         let t = c as f64 / 30.0;
         let state = physics.state().clone();
-        for (i, w) in plan.iter_mut().enumerate() {
-            *w = path.point(&scene, t + WAYPOINT_SPACING * (i + 1) as f64);
-        }
-        obs.update(&HumanoidSnapshot::from(&state), &plan, &scene)?;
-        policy.act(&obs, &mut action)?;
+        // The trace below reads this step's observation and action.
+        control_step(
+            physics.as_mut(),
+            &state,
+            &path,
+            &scene,
+            t,
+            &mut policy,
+            &mut obs,
+            &mut action,
+        )?;
         if c % 8 == 0 && std::env::var_os("PLAMO_TRACE_COM").is_some() {
             use plamo_physics::humanoid::{BODIES, shape_mass};
             let m: Vec<f64> = BODIES
@@ -239,36 +242,6 @@ fn trace(
                 policy.is_crawling(),
             );
         }
-        physics.set_action(
-            &action.pd_targets,
-            action.root_wrench.map(|w| plamo_physics::RootWrench {
-                force: w.force,
-                torque: w.torque,
-            }),
-        )?;
-        physics.step_n(4)?;
     }
     Ok(())
-}
-
-/// A straight path whose head height rises to standing (1.47 m) at `up_at` \[s\].
-struct UpDownPath {
-    line: StraightPath,
-    up_at: f64,
-}
-
-impl HeadPath for UpDownPath {
-    fn point(&self, scene: &plamo_scenes::Scene, t: f64) -> plamo_controller::Waypoint {
-        let mut w = self.line.at(scene, t);
-        if t >= self.up_at {
-            w.z += 1.47 - self.line.head_height;
-        }
-        w
-    }
-    fn direction(&self, _t: f64) -> [f64; 2] {
-        [1.0, 0.0]
-    }
-    fn head_height(&self) -> f64 {
-        self.line.head_height
-    }
 }

@@ -5,7 +5,7 @@
 
 use plamo_interfaces::PHYSICS_STEPS_PER_CONTROL;
 use plamo_physics::{
-    BackendKind, HEAD, HumanoidPose, HumanoidState, PhysicsSettings, create_backend,
+    BackendKind, HEAD, HumanoidPose, HumanoidState, PhysicsBackend, PhysicsSettings, create_backend,
 };
 use plamo_scenes::{HeightGrid, Scene};
 
@@ -55,6 +55,32 @@ impl StraightPath {
             z: scene.height_at(x, y) + self.head_height,
             v: self.speed,
         }
+    }
+}
+
+/// A straight path whose head height rises to standing (1.47 m) at `up_at` \[s\]: a
+/// crawl or crouch that must get up again.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RisingPath {
+    /// The path before it rises.
+    pub line: StraightPath,
+    /// When the head height rises \[s\].
+    pub up_at: f64,
+}
+
+impl HeadPath for RisingPath {
+    fn point(&self, scene: &Scene, t: f64) -> Waypoint {
+        let mut w = self.line.at(scene, t);
+        if t >= self.up_at {
+            w.z += 1.47 - self.line.head_height;
+        }
+        w
+    }
+    fn direction(&self, _t: f64) -> [f64; 2] {
+        [1.0, 0.0]
+    }
+    fn head_height(&self) -> f64 {
+        self.line.head_height
     }
 }
 
@@ -185,7 +211,6 @@ pub fn run_path(
     let mut metrics =
         MetricsAccumulator::new(PathRewardWeights::default(), settings.body_weight(), vec![]);
     let steps = (duration * plamo_interfaces::CONTROL_HZ as f64).round() as u64;
-    let mut plan = [Waypoint::default(); NUM_WAYPOINTS];
     for c in 0..steps {
         let t = c as f64 / plamo_interfaces::CONTROL_HZ as f64;
         let state = physics.state().clone();
@@ -221,19 +246,47 @@ pub fn run_path(
             policy.reset();
             continue;
         }
-        for (i, w) in plan.iter_mut().enumerate() {
-            *w = path.point(scene, t + WAYPOINT_SPACING * (i + 1) as f64);
-        }
-        obs.update(&HumanoidSnapshot::from(&state), &plan, scene)?;
-        policy.act(&obs, &mut action)?;
-        physics.set_action(
-            &action.pd_targets,
-            action.root_wrench.map(|w| plamo_physics::RootWrench {
-                force: w.force,
-                torque: w.torque,
-            }),
+        control_step(
+            physics.as_mut(),
+            &state,
+            path,
+            scene,
+            t,
+            policy,
+            &mut obs,
+            &mut action,
         )?;
-        physics.step_n(PHYSICS_STEPS_PER_CONTROL as usize)?;
     }
     Ok(metrics.summary())
+}
+
+/// One control step at time `t` \[s\] of a humanoid in `state`: the plan's next
+/// waypoints from `path`, the observation, the policy's action (left in `obs` and
+/// `action`), applied to `physics` for one control period.
+#[allow(clippy::too_many_arguments)]
+pub fn control_step(
+    physics: &mut dyn PhysicsBackend,
+    state: &HumanoidState,
+    path: &dyn HeadPath,
+    scene: &Scene,
+    t: f64,
+    policy: &mut dyn Policy,
+    obs: &mut Observation,
+    action: &mut Action,
+) -> Result<()> {
+    let mut plan = [Waypoint::default(); NUM_WAYPOINTS];
+    for (i, w) in plan.iter_mut().enumerate() {
+        *w = path.point(scene, t + WAYPOINT_SPACING * (i + 1) as f64);
+    }
+    obs.update(&HumanoidSnapshot::from(state), &plan, scene)?;
+    policy.act(obs, action)?;
+    physics.set_action(
+        &action.pd_targets,
+        action.root_wrench.map(|w| plamo_physics::RootWrench {
+            force: w.force,
+            torque: w.torque,
+        }),
+    )?;
+    physics.step_n(PHYSICS_STEPS_PER_CONTROL as usize)?;
+    Ok(())
 }

@@ -5,12 +5,10 @@
 //! bit-identical reruns.
 
 use plamo_controller::{
-    Action, ArcPath, ControllerSettings, HeadPath, HumanoidSnapshot, MetricsSummary,
-    ModelBasedController, NUM_WAYPOINTS, Observation, Policy, StraightPath, WAYPOINT_SPACING,
-    Waypoint, flat_scene, run_path,
+    Action, ArcPath, ControllerSettings, HeadPath, MetricsSummary, ModelBasedController,
+    Observation, RisingPath, StraightPath, control_step, flat_scene, run_path,
 };
 use plamo_physics::{BackendKind, HumanoidPose, PhysicsSettings, create_backend};
-use plamo_scenes::Scene;
 
 /// The crawl speed the gait follows closely (it lags beyond ~0.75 m/s).
 const SPEED: f64 = 0.5;
@@ -142,30 +140,8 @@ pub fn crawl_rollouts_are_bit_identical(kind: BackendKind) {
     assert_eq!(a, b, "{kind}");
 }
 
-/// A straight crawl whose plan rises to standing at `up_at`.
-struct UpDown {
-    line: StraightPath,
-    up_at: f64,
-}
-
-impl HeadPath for UpDown {
-    fn point(&self, scene: &Scene, t: f64) -> Waypoint {
-        let mut w = self.line.at(scene, t);
-        if t >= self.up_at {
-            w.z += 1.47 - self.line.head_height;
-        }
-        w
-    }
-    fn direction(&self, _t: f64) -> [f64; 2] {
-        [1.0, 0.0]
-    }
-    fn head_height(&self) -> f64 {
-        self.line.head_height
-    }
-}
-
 pub fn stands_up_when_the_plan_rises(kind: BackendKind) {
-    let path = UpDown {
+    let path = RisingPath {
         line: line(),
         up_at: 5.0,
     };
@@ -177,7 +153,6 @@ pub fn stands_up_when_the_plan_rises(kind: BackendKind) {
     let mut policy = ModelBasedController::new(settings()).unwrap();
     let mut obs = Observation::new(ModelBasedController::LAYOUT);
     let mut action = Action::zeros(ModelBasedController::LAYOUT.num_joints);
-    let mut plan = [Waypoint::default(); NUM_WAYPOINTS];
     let mut crawled = false;
     for c in 0..(9 * 30) {
         let t = c as f64 / 30.0;
@@ -190,22 +165,17 @@ pub fn stands_up_when_the_plan_rises(kind: BackendKind) {
             );
             crawled |= policy.is_crawling();
         }
-        for (i, w) in plan.iter_mut().enumerate() {
-            *w = path.point(&scene, t + WAYPOINT_SPACING * (i + 1) as f64);
-        }
-        obs.update(&HumanoidSnapshot::from(&state), &plan, &scene)
-            .unwrap();
-        policy.act(&obs, &mut action).unwrap();
-        physics
-            .set_action(
-                &action.pd_targets,
-                action.root_wrench.map(|w| plamo_physics::RootWrench {
-                    force: w.force,
-                    torque: w.torque,
-                }),
-            )
-            .unwrap();
-        physics.step_n(4).unwrap();
+        control_step(
+            physics.as_mut(),
+            &state,
+            &path,
+            &scene,
+            t,
+            &mut policy,
+            &mut obs,
+            &mut action,
+        )
+        .unwrap();
     }
     assert!(crawled, "{kind}: never in the crawl gait");
     let head = physics.state().head[2];
