@@ -22,13 +22,14 @@
 //!   speed, height and attitude; it is reported like the biped's.
 
 use std::f64::consts::{FRAC_PI_2, PI};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use plamo_interfaces::CONTROL_DT;
 use plamo_physics::NUM_JOINTS;
 use plamo_physics::humanoid::{BODIES, JOINTS, body_index, joint_index};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
+use super::params::{parse_toml, read_params};
 use super::residual_wrench;
 use crate::error::{ControllerError, Result};
 use crate::math::{sub3, wrap_angle};
@@ -152,21 +153,14 @@ impl Default for CrawlParams {
 impl CrawlParams {
     /// Parses and validates parameters; `origin` names the source in errors.
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
-        let p: CrawlParams = toml::from_str(text).map_err(|source| ControllerError::Toml {
-            path: origin.to_path_buf(),
-            source,
-        })?;
+        let p: CrawlParams = parse_toml(text, origin)?;
         p.validate()?;
         Ok(p)
     }
 
     /// Reads a parameter file.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| ControllerError::Io {
-            path: PathBuf::from(path),
-            source,
-        })?;
-        Self::from_toml(&text, path)
+        Self::from_toml(&read_params(path)?, path)
     }
 
     /// Checks the version and every field's range.

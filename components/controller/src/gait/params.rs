@@ -11,6 +11,22 @@ pub const GAIT_PARAMS_VERSION: u32 = 1;
 /// The built-in parameter file.
 pub const DEFAULT_GAIT_PARAMS: &str = include_str!("../../params/gait.toml");
 
+/// A parameter file's TOML as `T`; `origin` names the source in errors.
+pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, origin: &Path) -> Result<T> {
+    toml::from_str(text).map_err(|source| ControllerError::Toml {
+        path: origin.to_path_buf(),
+        source,
+    })
+}
+
+/// A parameter file's text.
+pub(crate) fn read_params(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|source| ControllerError::Io {
+        path: PathBuf::from(path),
+        source,
+    })
+}
+
 /// Parameters of one locomotion form (see `params/gait.toml` for units).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -184,21 +200,14 @@ impl Default for GaitParams {
 impl GaitParams {
     /// Parses and validates parameters; `origin` names the source in errors.
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
-        let p: GaitParams = toml::from_str(text).map_err(|source| ControllerError::Toml {
-            path: origin.to_path_buf(),
-            source,
-        })?;
+        let p: GaitParams = parse_toml(text, origin)?;
         p.validate()?;
         Ok(p)
     }
 
     /// Reads a parameter file.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| ControllerError::Io {
-            path: PathBuf::from(path),
-            source,
-        })?;
-        Self::from_toml(&text, path)
+        Self::from_toml(&read_params(path)?, path)
     }
 
     /// Checks the version and every form's ranges.
