@@ -215,6 +215,12 @@ use Axis::{X, Y, Z};
 
 /// All hinge joints, in [`JOINT_NAMES`] order, with limits and PD gains (gains from
 /// the MuJoCo walker prototype recorded in FIELD-NOTES).
+///
+/// Hips and knees have kd 60 and a 600 N m limit, not the prototype's kd 80 and
+/// 400 N m: the actuator force is capped at `max_torque`, so a joint cannot turn faster
+/// than about `max_torque / kd`, and 5 rad/s held a 2 m/s walk back (a run needs
+/// 7-9 rad/s at the hip); now about 10 rad/s. Lower damping alone (kd 40-50 at 400 N m)
+/// let the open-loop squat of the conformance suite fall in rapier.
 pub const JOINTS: [JointDesc; NUM_JOINTS] = [
     j("spine_x", X, [-0.6, 0.6], 1000.0, 100.0, 500.0),
     j("spine_y", Y, [-0.5, 1.2], 1000.0, 100.0, 500.0),
@@ -230,16 +236,16 @@ pub const JOINTS: [JointDesc; NUM_JOINTS] = [
     j("left_shoulder_y", Y, [-3.0, 1.0], 150.0, 15.0, 120.0),
     j("left_shoulder_z", Z, [-1.5, 1.5], 150.0, 15.0, 120.0),
     j("left_elbow", Y, [-2.6, 0.05], 120.0, 12.0, 100.0),
-    j("right_hip_x", X, [-1.0, 0.4], 800.0, 80.0, 400.0),
-    j("right_hip_y", Y, [-2.4, 0.6], 800.0, 80.0, 400.0),
-    j("right_hip_z", Z, [-0.8, 0.8], 800.0, 80.0, 400.0),
-    j("right_knee", Y, [-0.05, 2.7], 800.0, 80.0, 400.0),
+    j("right_hip_x", X, [-1.0, 0.4], 800.0, 60.0, 600.0),
+    j("right_hip_y", Y, [-2.4, 0.6], 800.0, 60.0, 600.0),
+    j("right_hip_z", Z, [-0.8, 0.8], 800.0, 60.0, 600.0),
+    j("right_knee", Y, [-0.05, 2.7], 800.0, 60.0, 600.0),
     j("right_ankle_y", Y, [-0.9, 0.9], 600.0, 60.0, 300.0),
     j("right_ankle_x", X, [-0.5, 0.5], 300.0, 30.0, 150.0),
-    j("left_hip_x", X, [-0.4, 1.0], 800.0, 80.0, 400.0),
-    j("left_hip_y", Y, [-2.4, 0.6], 800.0, 80.0, 400.0),
-    j("left_hip_z", Z, [-0.8, 0.8], 800.0, 80.0, 400.0),
-    j("left_knee", Y, [-0.05, 2.7], 800.0, 80.0, 400.0),
+    j("left_hip_x", X, [-0.4, 1.0], 800.0, 60.0, 600.0),
+    j("left_hip_y", Y, [-2.4, 0.6], 800.0, 60.0, 600.0),
+    j("left_hip_z", Z, [-0.8, 0.8], 800.0, 60.0, 600.0),
+    j("left_knee", Y, [-0.05, 2.7], 800.0, 60.0, 600.0),
     j("left_ankle_y", Y, [-0.9, 0.9], 600.0, 60.0, 300.0),
     j("left_ankle_x", X, [-0.5, 0.5], 300.0, 30.0, 150.0),
 ];
