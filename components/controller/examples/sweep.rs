@@ -7,7 +7,7 @@ use std::error::Error;
 
 use plamo_controller::{
     ArcPath, ControllerSettings, GaitParams, HeadPath, MetricsSummary, ModelBasedController,
-    StraightPath, flat_scene, run_path,
+    RampedPath, START_ACCEL, StraightPath, flat_scene, run_path,
 };
 use plamo_physics::BackendKind;
 use rayon::prelude::*;
@@ -57,10 +57,14 @@ fn main() -> Result<(), Box<dyn Error>> {
                             radius: if r % 2 == 0 { 5.0 } else { -5.0 },
                         })
                     } else {
-                        Box::new(StraightPath {
-                            start,
-                            speed,
-                            head_height: head,
+                        // From rest, like the tuner's and Table 2's paths.
+                        Box::new(RampedPath {
+                            line: StraightPath {
+                                start,
+                                speed,
+                                head_height: head,
+                            },
+                            accel: START_ACCEL,
                         })
                     };
                     run_path(

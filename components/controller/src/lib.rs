@@ -37,9 +37,11 @@ pub use observation::{
 pub use onnx_policy::{OnnxPolicy, PolicySidecar};
 pub use policy::{Action, Policy, RootWrench};
 pub use rollout::{
-    ArcPath, HeadPath, RisingPath, StraightPath, control_step, flat_scene, run_path, run_straight,
+    ArcPath, HeadPath, RampedPath, RisingPath, START_ACCEL, StraightPath, control_step, flat_scene,
+    run_path, run_straight,
 };
 pub use settings::{ControllerSettings, GRAVITY};
 pub use tune::{
-    Cost, Form, Generation, Rng, Sample, SepCmaEs, TuneSettings, evaluate, to_toml, tune,
+    Cost, Form, Generation, Rng, Sample, SepCmaEs, TuneSettings, evaluate, start_like, to_toml,
+    tune,
 };

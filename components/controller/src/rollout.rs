@@ -84,6 +84,57 @@ impl HeadPath for RisingPath {
     }
 }
 
+/// Acceleration from rest of the bench paths (tuning, `plamo eval locomotion`)
+/// \[m/s^2\]: a little below the gait's own rate limit (2.5 m/s^2), so a walker that
+/// keeps up is not left behind by the start.
+pub const START_ACCEL: f64 = 2.0;
+
+/// A [`StraightPath`] that starts from rest: its speed rises at `accel` to the line's
+/// speed, then stays. A standing humanoid cannot be at 4 m/s at t = 0: on the instant
+/// path the lag of the start (v^2 / 2a behind, 3.2 m at 4 m/s with the gait's own
+/// 2.5 m/s^2) stays for the whole run and hides the steady tracking error. The planner
+/// ramps too (its a_max, 0.5 m/s^2 in the paper).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RampedPath {
+    /// The path at full speed.
+    pub line: StraightPath,
+    /// Acceleration from rest \[m/s^2\], > 0.
+    pub accel: f64,
+}
+
+impl RampedPath {
+    /// Distance along the line \[m\] and speed \[m/s\] at time `t` \[s\].
+    fn travel(&self, t: f64) -> (f64, f64) {
+        let t = t.max(0.0);
+        let v = self.line.speed;
+        let t_ramp = v / self.accel;
+        if t < t_ramp {
+            (0.5 * self.accel * t * t, self.accel * t)
+        } else {
+            (v * t - 0.5 * v * t_ramp, v)
+        }
+    }
+}
+
+impl HeadPath for RampedPath {
+    fn point(&self, scene: &Scene, t: f64) -> Waypoint {
+        let (d, v) = self.travel(t);
+        let (x, y) = (self.line.start[0] + d, self.line.start[1]);
+        Waypoint {
+            x,
+            y,
+            z: scene.height_at(x, y) + self.line.head_height,
+            v,
+        }
+    }
+    fn direction(&self, _t: f64) -> [f64; 2] {
+        [1.0, 0.0]
+    }
+    fn head_height(&self) -> f64 {
+        self.line.head_height
+    }
+}
+
 /// A head path the rollout follows: the plan's point at time `t` and the path's
 /// direction there.
 pub trait HeadPath {
@@ -289,4 +340,30 @@ pub fn control_step(
     )?;
     physics.step_n(PHYSICS_STEPS_PER_CONTROL as usize)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ramped_path_starts_from_rest_and_joins_the_line() {
+        let scene = flat_scene(100.0);
+        let line = StraightPath {
+            start: [1.0, 2.0],
+            speed: 4.0,
+            head_height: 1.47,
+        };
+        let p = RampedPath { line, accel: 2.0 };
+        assert_eq!(p.point(&scene, 0.0).x, 1.0);
+        assert_eq!(p.point(&scene, 0.0).v, 0.0);
+        // Continuous where the ramp ends (t = 2 s, 4 m travelled).
+        let (a, b) = (p.point(&scene, 2.0 - 1e-9), p.point(&scene, 2.0 + 1e-9));
+        assert!((a.x - 5.0).abs() < 1e-6 && (b.x - 5.0).abs() < 1e-6);
+        // Then at the line's speed, v^2 / 2a = 4 m behind the instant path.
+        let late = p.point(&scene, 10.0);
+        assert!((late.x - (line.at(&scene, 10.0).x - 4.0)).abs() < 1e-9);
+        assert_eq!(late.v, 4.0);
+        assert_eq!(late.z, 1.47);
+    }
 }

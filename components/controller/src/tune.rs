@@ -13,7 +13,7 @@ pub use cmaes::{Rng, Sample, SepCmaEs};
 
 use crate::error::{ControllerError, Result};
 use crate::gait::{FormParams, GaitParams, ModelBasedController};
-use crate::rollout::{StraightPath, flat_scene, run_straight};
+use crate::rollout::{RampedPath, START_ACCEL, StraightPath, flat_scene, run_path};
 use crate::settings::ControllerSettings;
 
 /// The locomotion form whose parameters are tuned.
@@ -58,6 +58,16 @@ impl Form {
         match self {
             Form::Crouch => 3.0,
             Form::Walk | Form::Run => 1.0,
+        }
+    }
+
+    /// Cost of a fall \[m-equivalent\]: more than the XY error a reset onto the plan
+    /// saves. The run's XY error is metres (the start from rest leaves it behind), so
+    /// at 1 m a search trades falls for lag; a fall ends a run in a route.
+    fn fall_cost(self) -> f64 {
+        match self {
+            Form::Run => 3.0,
+            Form::Walk | Form::Crouch => 1.0,
         }
     }
 
@@ -184,16 +194,14 @@ pub struct TuneSettings {
     pub controller: ControllerSettings,
 }
 
-/// Cost of a fall \[m-equivalent\]: more than the XY error a reset onto the plan saves.
-const FALL_COST: f64 = 1.0;
-
 /// Cost per unit of mean residual force (fraction of m*g) \[m-equivalent\]: 0.1 m*g
 /// weighs as 0.2 m of XY error, so the search prefers a gait that propels itself.
 const RESIDUAL_COST: f64 = 2.0;
 
 /// Cost of one parameter set: mean over rollouts of
-/// `xy_err + w_z * z_err + RESIDUAL_COST * residual_force_mean + FALL_COST * falls`
-/// (metres, fraction of m*g, count; `w_z` 3 for the crouch, else 1).
+/// `xy_err + w_z * z_err + RESIDUAL_COST * residual_force_mean + w_fall * falls`
+/// (metres, fraction of m*g, count; `w_z` 3 for the crouch, else 1; `w_fall` 3 for the
+/// run, else 1).
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct Cost {
     /// Total cost \[-\].
@@ -237,16 +245,19 @@ pub fn evaluate(params: &GaitParams, s: &TuneSettings, seed: u64) -> Result<Cost
         .par_iter()
         .map(|&(backend, speed)| {
             let mut policy = ModelBasedController::with_params(*params, s.controller.clone())?;
-            let path = StraightPath {
-                start: [0.0, 0.0],
-                speed,
-                head_height: head,
+            let path = RampedPath {
+                line: StraightPath {
+                    start: [0.0, 0.0],
+                    speed,
+                    head_height: head,
+                },
+                accel: START_ACCEL,
             };
             let scene = flat_scene(speed * s.duration + 5.0);
-            let m = run_straight(
+            let m = run_path(
                 backend,
                 &scene,
-                path,
+                &path,
                 s.duration,
                 &mut policy,
                 &s.controller,
@@ -256,7 +267,7 @@ pub fn evaluate(params: &GaitParams, s: &TuneSettings, seed: u64) -> Result<Cost
                 total: m.xy_err_mean
                     + s.form.z_weight() * m.z_err_mean
                     + RESIDUAL_COST * m.residual_force_mean
-                    + FALL_COST * falls,
+                    + s.form.fall_cost() * falls,
                 falls,
                 xy: m.xy_err_mean,
                 z: m.z_err_mean,
@@ -300,6 +311,21 @@ fn encode(base: &GaitParams, form: Form) -> Vec<f64> {
         .iter()
         .map(|&(name, lo, hi)| ((*field(&mut p, form, name) - lo) / (hi - lo)).clamp(0.0, 1.0))
         .collect()
+}
+
+/// `base` with the searched parameters of `form` (residual gains aside) copied from
+/// the section of `like`: a search for the run can start from the tuned walk, whose
+/// gait at run speeds falls less than an untuned run section.
+pub fn start_like(base: &GaitParams, form: Form, like: Form) -> GaitParams {
+    let mut p = *base;
+    for &(name, _, _) in tuned(form) {
+        if name.starts_with("residual.") {
+            continue;
+        }
+        let v = *field(&mut p, like, name);
+        *field(&mut p, form, name) = v;
+    }
+    p
 }
 
 /// Runs CMA-ES from `base`; returns the best parameters found and their cost. The

@@ -20,8 +20,8 @@ use plamo::eval::slalom::{self, QpConfig, Slalom};
 use plamo::eval::{self, Experiment, RunOptions, Shard};
 use plamo::viz::{FAMILY, ensure_registered};
 use plamo_controller::{
-    ControllerSettings, GaitParams, MetricsSummary, ModelBasedController, StraightPath, flat_scene,
-    run_straight,
+    ControllerSettings, GaitParams, MetricsSummary, ModelBasedController, RampedPath, START_ACCEL,
+    StraightPath, flat_scene, run_path,
 };
 use plamo_physics::BackendKind;
 use plamo_scenes::Scene;
@@ -284,17 +284,20 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
             let (scene, start) = &scenes[t];
             let (_, head, speed) = FORMS[f];
             // Runs differ by where they start along the strip and sideways [m].
-            let path = StraightPath {
-                start: [
-                    start[0] + 0.37 * r as f64,
-                    start[1] + 0.1 * (r % 3) as f64 - 0.1,
-                ],
-                speed,
-                head_height: head,
+            let path = RampedPath {
+                line: StraightPath {
+                    start: [
+                        start[0] + 0.37 * r as f64,
+                        start[1] + 0.1 * (r % 3) as f64 - 0.1,
+                    ],
+                    speed,
+                    head_height: head,
+                },
+                accel: START_ACCEL,
             };
             let duration = a.duration.min((STRIP - 0.37 * r as f64) / speed);
             let mut policy = ModelBasedController::with_params(params, settings.clone())?;
-            let m = run_straight(backend, scene, path, duration, &mut policy, &settings)?;
+            let m = run_path(backend, scene, &path, duration, &mut policy, &settings)?;
             bar.inc(1);
             Ok(m)
         })
@@ -328,6 +331,7 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
 fn markdown(cells: &[[Cell; 4]; 4], a: &LocomotionArgs) -> String {
     let mut s = format!(
         "Command: `plamo eval locomotion --physics {} --runs {} --duration {}`\n\n\
+         Paths start from rest at {START_ACCEL} m/s^2, then keep the form's speed.\n\n\
          Mean head XY-err / Z-err [m], ours (paper Table 2 in brackets).\n\n\
          | terrain | crawl 0.4 m @ 1 | crouch-walk 0.8 m @ 2 | walk 1.47 m @ 2 | run 1.47 m @ 4 |\n|---|---|---|---|---|\n",
         a.physics, a.runs, a.duration
