@@ -21,12 +21,20 @@ const ROUTE: &str = "Run from the tree to the car, then crawl to the bench";
 
 struct Timing {
     wall: f64,
+    /// Start-up (components built, processes ready), the lockstep loop, and the
+    /// shutdown \[s\].
+    phases: [f64; 3],
     digest: u64,
-    /// Per-call medians \[s\]: physics, planners, controllers.
-    calls: [f64; 3],
+    /// Per-call medians and means \[s\]: physics, planners, controllers.
+    calls: [(f64, f64); 3],
 }
 
-fn drive(spec: &RunSpec, links: Links, max_seconds: f64) -> (Lockstep, [f64; 3]) {
+fn median_mean(v: &[f64]) -> (f64, f64) {
+    let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+    (median_p99(v).0, mean)
+}
+
+fn drive(spec: &RunSpec, links: Links, max_seconds: f64) -> (Lockstep, [(f64, f64); 3]) {
     let scene = spec.load_scene().expect("scene");
     let counts: Vec<usize> = (0..spec.agents())
         .map(|k| {
@@ -48,9 +56,9 @@ fn drive(spec: &RunSpec, links: Links, max_seconds: f64) -> (Lockstep, [f64; 3])
     while ls.step().expect("step") == StepStatus::Running {}
     let t = ls.times();
     let calls = [
-        median_p99(&t.physics).0,
-        median_p99(&t.planners).0,
-        median_p99(&t.controllers).0,
+        median_mean(&t.physics),
+        median_mean(&t.planners),
+        median_mean(&t.controllers),
     ];
     (ls, calls)
 }
@@ -59,29 +67,32 @@ fn in_process(spec: &RunSpec, max_seconds: f64) -> Timing {
     let start = Instant::now();
     let scene = spec.load_scene().expect("scene");
     let links = spec.in_process(&scene).expect("components");
+    let up = start.elapsed().as_secs_f64();
     let (ls, calls) = drive(spec, links, max_seconds);
+    let wall = start.elapsed().as_secs_f64();
     Timing {
-        wall: start.elapsed().as_secs_f64(),
+        wall,
+        phases: [up, wall - up, 0.0],
         digest: ls.digest().value(),
         calls,
     }
 }
 
-fn processes(spec: &RunSpec, max_seconds: f64, poll: Duration, run: &str) -> Timing {
+fn processes(spec: &RunSpec, max_seconds: f64, settings: IpcSettings, run: &str) -> Timing {
     let exe = Path::new(env!("CARGO_BIN_EXE_plamo"));
-    let settings = IpcSettings {
-        poll,
-        ..IpcSettings::default()
-    };
     let start = Instant::now();
     let (procs, links) =
         ProcessRun::start(spec, &RunId::new(run).expect("id"), exe, settings, None)
             .expect("component processes");
+    let up = start.elapsed().as_secs_f64();
     let (ls, calls) = drive(spec, links, max_seconds);
+    let looped = start.elapsed().as_secs_f64();
     let digest = ls.digest().value();
     procs.finish(Some(ls.into_links()));
+    let wall = start.elapsed().as_secs_f64();
     Timing {
-        wall: start.elapsed().as_secs_f64(),
+        wall,
+        phases: [up, looped - up, wall - looped],
         digest,
         calls,
     }
@@ -92,15 +103,43 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
+/// The multi-process variants measured against in-process, by name.
+fn variants() -> Vec<(&'static str, IpcSettings)> {
+    let default = IpcSettings::default();
+    let us = Duration::from_micros;
+    let v = |name, poll, component_poll, sched_slice| {
+        (
+            name,
+            IpcSettings {
+                poll,
+                component_poll,
+                sched_slice,
+                ..default
+            },
+        )
+    };
+    vec![
+        ("processes (default)", default),
+        v("block, OS slice", us(0), us(0), None),
+        v("poll 30 us, 0.1 ms", us(30), us(0), Some(us(100))),
+    ]
+}
+
 fn main() {
-    // `cargo bench` passes `--bench`; numbers are ours.
-    let nums: Vec<f64> = std::env::args().filter_map(|a| a.parse().ok()).collect();
+    // `cargo bench` passes `--bench`; numbers are ours, and `rapier` or `mujoco` picks
+    // one backend.
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let nums: Vec<f64> = args.iter().filter_map(|a| a.parse().ok()).collect();
     let rounds = nums.first().map_or(5, |&r| r as usize).max(1);
     let max_seconds = nums.get(1).copied().unwrap_or(60.0);
     let mut backends = vec![BackendKind::Rapier];
     if BackendKind::Mujoco.is_available() {
         backends.push(BackendKind::Mujoco);
     }
+    backends.retain(|b| {
+        !args.iter().any(|a| a == "rapier" || a == "mujoco") || args.contains(&b.to_string())
+    });
+    let variants = variants();
     println!("route `{ROUTE}` on playground, {max_seconds} s simulated, {rounds} rounds");
     for backend in backends {
         let spec = RunSpec {
@@ -109,44 +148,46 @@ fn main() {
             backend,
             seed: 0,
         };
-        let mut walls = [Vec::new(), Vec::new(), Vec::new()];
-        let mut ratios = [Vec::new(), Vec::new()];
-        let mut calls = [[0.0; 3]; 3];
+        let n = variants.len() + 1;
+        let mut timings: Vec<Vec<Timing>> = (0..n).map(|_| Vec::new()).collect();
+        let mut ratios: Vec<Vec<f64>> = vec![Vec::new(); n];
         for r in 0..rounds {
             let a = in_process(&spec, max_seconds);
-            let b = processes(
-                &spec,
-                max_seconds,
-                IpcSettings::default().poll,
-                "bench-poll",
-            );
-            let c = processes(&spec, max_seconds, Duration::ZERO, "bench-block");
-            for t in [&b, &c] {
+            for (i, (_, settings)) in variants.iter().enumerate() {
+                let t = processes(&spec, max_seconds, *settings, &format!("bench{i}"));
                 assert_eq!(t.digest, a.digest, "round {r}: multi-process run differs");
+                ratios[i + 1].push(t.wall / a.wall);
+                timings[i + 1].push(t);
             }
-            for (i, t) in [&a, &b, &c].iter().enumerate() {
-                walls[i].push(t.wall);
-                calls[i] = t.calls;
-            }
-            ratios[0].push(b.wall / a.wall);
-            ratios[1].push(c.wall / a.wall);
-        }
-        let names = ["in-process", "processes (poll 0.5 ms)", "processes (block)"];
-        println!("\n{backend}:");
-        for (i, name) in names.iter().enumerate() {
-            let w = median(&mut walls[i]);
-            let c = calls[i];
-            println!(
-                "  {name:<24} wall median {w:.3} s; last round's per-call medians [us]: physics {:.0}, planner {:.0}, controller {:.0}",
-                c[0] * 1e6,
-                c[1] * 1e6,
-                c[2] * 1e6
-            );
+            ratios[0].push(1.0);
+            timings[0].push(a);
         }
         println!(
-            "  multi / in-process (median of per-round ratios): poll {:.2}x, block {:.2}x",
-            median(&mut ratios[0]),
-            median(&mut ratios[1])
+            "\n{backend}: medians over rounds; start-up / loop / shutdown [s]; per call median (mean) [us]"
         );
+        let names = std::iter::once("in-process").chain(variants.iter().map(|v| v.0));
+        for (i, name) in names.enumerate() {
+            let ts = &timings[i];
+            let med =
+                |f: &dyn Fn(&Timing) -> f64| median(&mut ts.iter().map(f).collect::<Vec<_>>());
+            let call = |k: usize| {
+                format!(
+                    "{:.0} ({:.0})",
+                    med(&|t| t.calls[k].0) * 1e6,
+                    med(&|t| t.calls[k].1) * 1e6
+                )
+            };
+            println!(
+                "  {name:<22} wall {:.3} s = {:.3} / {:.3} / {:.3}; physics {}, planner {}, controller {}; wall / in-process {:.2}x",
+                med(&|t| t.wall),
+                med(&|t| t.phases[0]),
+                med(&|t| t.phases[1]),
+                med(&|t| t.phases[2]),
+                call(0),
+                call(1),
+                call(2),
+                median(&mut ratios[i]),
+            );
+        }
     }
 }

@@ -14,8 +14,8 @@ use iceoryx2::prelude::*;
 use plamo_interfaces::{ComponentKind, RunId, ServiceNames};
 
 use crate::ipc::{
-    IpcError, IpcSettings, RemoteComponent, StaleRun, clean_stale_runs, dead_nodes, end_run,
-    run_config,
+    IpcError, IpcSettings, RemoteComponent, SliceHint, StaleRun, clean_stale_runs, dead_nodes,
+    end_run, run_config,
 };
 use crate::lockstep::{Link, Links, RunError};
 use crate::spec::RunSpec;
@@ -38,11 +38,22 @@ pub fn node_name(kind: ComponentKind, agent: u32) -> String {
     }
 }
 
+/// A component instance's name in errors and reports (`physics`, `planner-0`).
+fn label(kind: ComponentKind, agent: u32) -> String {
+    match kind {
+        ComponentKind::Physics => "physics".to_string(),
+        _ => format!("{kind}-{agent}"),
+    }
+}
+
 /// The component processes of one run and the orchestrator's side of their links.
 pub struct ProcessRun {
     cfg: Config,
     node: Option<Node<ipc::Service>>,
     children: Vec<(String, Arc<Mutex<Option<Child>>>)>,
+    /// The orchestrator thread's latency hint, held for the run (dropped on the
+    /// thread that started the run, or that thread keeps the short slice).
+    _hint: SliceHint,
     /// Runs that had crashed earlier (any run id) whose files were removed at start.
     pub cleaned: Vec<StaleRun>,
 }
@@ -129,6 +140,7 @@ impl ProcessRun {
             cfg,
             node: None,
             children: Vec::new(),
+            _hint: SliceHint::request(settings.sched_slice),
             cleaned,
         };
         let result = this.spawn_all(&node, spec, run, launch, settings);
@@ -142,23 +154,20 @@ impl ProcessRun {
         }
     }
 
+    /// The orchestrator's link to component `kind`/`agent`, whose process (if this
+    /// run spawned it) is in `slot`.
     fn open<I, O>(
-        &mut self,
+        &self,
         node: &Node<ipc::Service>,
         run: &RunId,
-        kind: ComponentKind,
-        agent: u32,
+        (kind, agent): (ComponentKind, u32),
+        slot: &Slot,
         settings: IpcSettings,
-    ) -> Result<(RemoteComponent<I, O>, Slot), RunError>
+    ) -> Result<RemoteComponent<I, O>, RunError>
     where
         I: ZeroCopySend + Copy + std::fmt::Debug + Default + 'static,
         O: ZeroCopySend + Copy + std::fmt::Debug + Default + 'static,
     {
-        let label = match kind {
-            ComponentKind::Physics => "physics".to_string(),
-            _ => format!("{kind}-{agent}"),
-        };
-        let slot: Slot = Arc::new(Mutex::new(None));
         let watched = slot.clone();
         let cfg = self.cfg.clone();
         let node_name = node_name(kind, agent);
@@ -175,10 +184,8 @@ impl ProcessRun {
                 .then(|| format!("its node `{node_name}` is dead"))
         });
         let names = ServiceNames::new(run, kind, agent);
-        let remote = RemoteComponent::open(node, label.clone(), &names, settings, liveness)
-            .map_err(ipc_setup("opening a component link"))?;
-        self.children.push((label, slot.clone()));
-        Ok((remote, slot))
+        RemoteComponent::open(node, label(kind, agent), &names, settings, liveness)
+            .map_err(ipc_setup("opening a component link"))
     }
 
     fn spawn_all(
@@ -190,20 +197,24 @@ impl ProcessRun {
         settings: IpcSettings,
     ) -> Result<Links, RunError> {
         let all_args = component_args(spec, run);
-        let spawn = |kind: ComponentKind, agent: u32, slot: &Slot| -> Result<(), RunError> {
+        // Every process is started before the links are opened, so each loads its
+        // scene and builds its component while this process creates the services. A
+        // ready frame sent before our ports exist is lost; components repeat it
+        // every millisecond until their first request.
+        let mut slots = Vec::new();
+        for (kind, agent, args) in &all_args {
+            let slot: Slot = Arc::new(Mutex::new(None));
+            self.children.push((label(*kind, *agent), slot.clone()));
+            slots.push(slot.clone());
             let Launch::Spawn { exe, physics_fault } = launch else {
-                return Ok(());
+                continue;
             };
-            let args = all_args
-                .iter()
-                .find(|(k, a, _)| *k == kind && *a == agent)
-                .map(|(_, _, args)| args.clone())
-                .unwrap_or_default();
             let mut cmd = Command::new(exe);
             cmd.args(args)
+                .args(settings.component_args())
                 .args(
                     physics_fault
-                        .filter(|_| kind == ComponentKind::Physics)
+                        .filter(|_| *kind == ComponentKind::Physics)
                         .map(|f| ["--fault".to_string(), f.to_string()])
                         .into_iter()
                         .flatten(),
@@ -218,19 +229,34 @@ impl ProcessRun {
                 ))
             })?;
             *slot.lock().expect("child slot") = Some(child);
-            Ok(())
-        };
-        let (mut physics, slot) = self.open(node, run, ComponentKind::Physics, 0, settings)?;
-        spawn(ComponentKind::Physics, 0, &slot)?;
+        }
+        // `component_args` lists physics, then each agent's planner and controller.
+        let mut slots = slots.iter();
+        let mut next_slot = || slots.next().expect("one slot per component");
+        let mut physics = self.open(
+            node,
+            run,
+            (ComponentKind::Physics, 0),
+            next_slot(),
+            settings,
+        )?;
         let mut planners = Vec::new();
         let mut controllers = Vec::new();
         for k in 0..spec.agents() as u32 {
-            let (p, slot) = self.open(node, run, ComponentKind::Planner, k, settings)?;
-            spawn(ComponentKind::Planner, k, &slot)?;
-            planners.push(p);
-            let (c, slot) = self.open(node, run, ComponentKind::Controller, k, settings)?;
-            spawn(ComponentKind::Controller, k, &slot)?;
-            controllers.push(c);
+            planners.push(self.open(
+                node,
+                run,
+                (ComponentKind::Planner, k),
+                next_slot(),
+                settings,
+            )?);
+            controllers.push(self.open(
+                node,
+                run,
+                (ComponentKind::Controller, k),
+                next_slot(),
+                settings,
+            )?);
         }
         let identity = spec.identity();
         physics.wait_ready(&identity)?;
@@ -307,7 +333,7 @@ impl ProcessRun {
                 match child.try_wait() {
                     Ok(Some(_)) => break,
                     Ok(None) if Instant::now() < deadline => {
-                        std::thread::sleep(Duration::from_millis(10))
+                        std::thread::sleep(Duration::from_millis(1))
                     }
                     _ => {
                         let _ = child.kill();
@@ -321,7 +347,7 @@ impl ProcessRun {
         // Components attached by hand are nobody's children: give them the same
         // grace to exit, watching their nodes instead of their processes.
         while Instant::now() < deadline && self.live_components() > 0 {
-            std::thread::sleep(Duration::from_millis(10));
+            std::thread::sleep(Duration::from_millis(1));
         }
         drop(self.node.take());
         // Every node of the run is gone now; the last file can go.

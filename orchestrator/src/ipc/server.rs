@@ -2,7 +2,7 @@
 //! which component it serves; it calls the same `step` the in-process run calls.
 
 use std::fmt::Debug;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use iceoryx2::node::NodeView;
 use iceoryx2::prelude::*;
@@ -10,6 +10,7 @@ use plamo_interfaces::{Component, ServiceNames, Tick};
 
 use super::envelope::{Envelope, EnvelopeKind};
 use super::error::IpcError;
+use super::sched::SliceHint;
 use super::setup::{Channels, IpcSettings};
 
 /// The orchestrator's node name; components watch for it.
@@ -22,6 +23,9 @@ pub const READY_TICK: u64 = u64::MAX;
 /// many requests, an idle one every wait slice: `Node::wait` is a nanosleep, too
 /// costly to pay on every request of a fast lockstep.
 const TERMINATION_EVERY: u64 = 64;
+
+/// How often a component repeats its ready frame until the first request.
+const READY_REPEAT: Duration = Duration::from_millis(1);
 
 /// How often an idle component looks for its orchestrator.
 const LIVENESS_EVERY: u32 = 4;
@@ -66,16 +70,35 @@ where
         &names.response_event,
         &names.request_event,
     )?;
+    let _hint = SliceHint::request(settings.sched_slice);
     let mut served = 0u64;
     let mut idle_slices = 0u32;
+    let mut idle_since = Instant::now();
     ch.send(Envelope::ready(READY_TICK, identity))?;
     loop {
-        let Some(frame) = ch.receive_within(settings.slice)? else {
-            if node.wait(Duration::ZERO).is_err() {
-                return Err(IpcError::Shutdown);
-            }
+        // Until the first request the orchestrator may not have its ports yet:
+        // announce again every millisecond (it drops the duplicates).
+        let wait = if served == 0 {
+            READY_REPEAT.min(settings.slice)
+        } else {
+            settings.slice
+        };
+        let frame = match ch.poll_within(settings.component_poll)? {
+            Some(frame) => Some(frame),
+            None => ch.receive_within(wait)?,
+        };
+        let Some(frame) = frame else {
             if served == 0 {
                 ch.send(Envelope::ready(READY_TICK, identity))?;
+            }
+            // A wake-up without a frame (the notification of one already taken) is
+            // not a slice of idleness.
+            if idle_since.elapsed() < settings.slice / 2 {
+                continue;
+            }
+            idle_since = Instant::now();
+            if node.wait(Duration::ZERO).is_err() {
+                return Err(IpcError::Shutdown);
             }
             idle_slices += 1;
             if idle_slices.is_multiple_of(LIVENESS_EVERY) && !orchestrator_alive(node.config()) {
@@ -88,6 +111,7 @@ where
             continue;
         };
         idle_slices = 0;
+        idle_since = Instant::now();
         if served.is_multiple_of(TERMINATION_EVERY) && node.wait(Duration::ZERO).is_err() {
             return Err(IpcError::Shutdown);
         }

@@ -26,6 +26,13 @@ pub struct IpcSettings {
     /// 1.22x without, see BENCHMARKS.md). Default: 0.5 ms with 4 or more cores, else
     /// 0 (always block). Never changes results.
     pub poll: Duration,
+    /// How long a component polls for the next request before it blocks on the
+    /// orchestrator's wake-up event \[s\] (default 0: always block).
+    pub component_poll: Duration,
+    /// Time slice the orchestrator's and the components' threads ask the scheduler for
+    /// during a run (see [`SliceHint`](super::SliceHint)); `None` keeps the OS
+    /// default. Default 0.1 ms, the shortest Linux grants. Never changes results.
+    pub sched_slice: Option<Duration>,
     /// How long a component may take to come up and say it is ready (default 30 s).
     pub ready_timeout: Duration,
     /// How long one step may take before the component is declared hung (default 60 s).
@@ -47,8 +54,33 @@ impl Default for IpcSettings {
         Self {
             slice: Duration::from_millis(50),
             poll: default_poll(),
+            component_poll: Duration::ZERO,
+            sched_slice: Some(Duration::from_micros(100)),
             ready_timeout: Duration::from_secs(30),
             call_timeout: Duration::from_secs(60),
+        }
+    }
+}
+
+impl IpcSettings {
+    /// The `plamo component` options that hand a spawned component this run's
+    /// component-side settings.
+    pub fn component_args(&self) -> Vec<String> {
+        vec![
+            "--ipc-poll-us".into(),
+            self.component_poll.as_micros().to_string(),
+            "--ipc-slice-us".into(),
+            self.sched_slice.map_or(0, |s| s.as_micros()).to_string(),
+        ]
+    }
+
+    /// These settings with the component side's as `plamo component` got them
+    /// (`slice_us` 0: the OS default slice).
+    pub fn with_component_args(self, poll_us: u64, slice_us: u64) -> Self {
+        Self {
+            component_poll: Duration::from_micros(poll_us),
+            sched_slice: (slice_us > 0).then(|| Duration::from_micros(slice_us)),
+            ..self
         }
     }
 }
@@ -66,6 +98,12 @@ pub fn run_config(run: &RunId) -> Result<Config, IpcError> {
         FileName::new(prefix.as_bytes()).map_err(setup(format!("prefix {prefix}")))?;
     Ok(cfg)
 }
+
+/// Nodes a link's services admit: the orchestrator and its component, and room for
+/// a component started by hand for the wrong run (refused by the ready handshake)
+/// while the right one comes up. Small quotas make the services' shared memory
+/// small and quick to create (iceoryx2's defaults are sized for 16-36 ports).
+const QUOTA_NODES: usize = 4;
 
 /// One side of a component link: payloads out (`Tx`) and in (`Rx`), and an event
 /// each way. The orchestrator sends requests and receives responses; the component
@@ -104,6 +142,7 @@ where
             .subscriber_max_buffer_size(4)
             .max_publishers(1)
             .max_subscribers(1)
+            .max_nodes(QUOTA_NODES)
             .open_or_create()
             .map_err(setup(format!("service {tx}")))?;
         let rx_service = node
@@ -113,16 +152,25 @@ where
             .subscriber_max_buffer_size(4)
             .max_publishers(1)
             .max_subscribers(1)
+            .max_nodes(QUOTA_NODES)
             .open_or_create()
             .map_err(setup(format!("service {rx}")))?;
         let tx_ev = node
             .service_builder(&service_name(tx_event)?)
             .event()
+            .max_nodes(QUOTA_NODES)
+            .max_notifiers(QUOTA_NODES)
+            .max_listeners(QUOTA_NODES)
+            .event_id_max_value(0)
             .open_or_create()
             .map_err(setup(format!("event {tx_event}")))?;
         let rx_ev = node
             .service_builder(&service_name(rx_event)?)
             .event()
+            .max_nodes(QUOTA_NODES)
+            .max_notifiers(QUOTA_NODES)
+            .max_listeners(QUOTA_NODES)
+            .event_id_max_value(0)
             .open_or_create()
             .map_err(setup(format!("event {rx_event}")))?;
         Ok(Self {
