@@ -106,22 +106,15 @@ fn median(v: &mut [f64]) -> f64 {
 /// The multi-process variants measured against in-process, by name.
 fn variants() -> Vec<(&'static str, IpcSettings)> {
     let default = IpcSettings::default();
-    let us = Duration::from_micros;
-    let v = |name, poll, component_poll, sched_slice| {
-        (
-            name,
-            IpcSettings {
-                poll,
-                component_poll,
-                sched_slice,
-                ..default
-            },
-        )
-    };
     vec![
         ("processes (default)", default),
-        v("block, OS slice", us(0), us(0), None),
-        v("poll 30 us, 0.1 ms", us(30), us(0), Some(us(100))),
+        (
+            "processes, poll 30 us",
+            IpcSettings {
+                poll: Duration::from_micros(30),
+                ..default
+            },
+        ),
     ]
 }
 

@@ -14,8 +14,8 @@ use iceoryx2::prelude::*;
 use plamo_interfaces::{ComponentKind, RunId, ServiceNames};
 
 use crate::ipc::{
-    IpcError, IpcSettings, RemoteComponent, SliceHint, StaleRun, clean_stale_runs, dead_nodes,
-    end_run, run_config,
+    IpcError, IpcSettings, RemoteComponent, StaleRun, clean_stale_runs, dead_nodes, end_run,
+    run_config,
 };
 use crate::lockstep::{Link, Links, RunError};
 use crate::spec::RunSpec;
@@ -51,9 +51,6 @@ pub struct ProcessRun {
     cfg: Config,
     node: Option<Node<ipc::Service>>,
     children: Vec<(String, Arc<Mutex<Option<Child>>>)>,
-    /// The orchestrator thread's latency hint, held for the run (dropped on the
-    /// thread that started the run, or that thread keeps the short slice).
-    _hint: SliceHint,
     /// Runs that had crashed earlier (any run id) whose files were removed at start.
     pub cleaned: Vec<StaleRun>,
 }
@@ -140,7 +137,6 @@ impl ProcessRun {
             cfg,
             node: None,
             children: Vec::new(),
-            _hint: SliceHint::request(settings.sched_slice),
             cleaned,
         };
         let result = this.spawn_all(&node, spec, run, launch, settings);
@@ -152,6 +148,14 @@ impl ProcessRun {
                 Err(e)
             }
         }
+    }
+
+    /// A new, empty process slot for component `kind`/`agent`, watched by
+    /// [`ProcessRun::finish`].
+    fn slot(&mut self, (kind, agent): (ComponentKind, u32)) -> Slot {
+        let slot: Slot = Arc::new(Mutex::new(None));
+        self.children.push((label(kind, agent), slot.clone()));
+        slot
     }
 
     /// The orchestrator's link to component `kind`/`agent`, whose process (if this
@@ -197,24 +201,20 @@ impl ProcessRun {
         settings: IpcSettings,
     ) -> Result<Links, RunError> {
         let all_args = component_args(spec, run);
-        // Every process is started before the links are opened, so each loads its
-        // scene and builds its component while this process creates the services. A
-        // ready frame sent before our ports exist is lost; components repeat it
-        // every millisecond until their first request.
-        let mut slots = Vec::new();
-        for (kind, agent, args) in &all_args {
-            let slot: Slot = Arc::new(Mutex::new(None));
-            self.children.push((label(*kind, *agent), slot.clone()));
-            slots.push(slot.clone());
+        let spawn = |(kind, agent): (ComponentKind, u32), slot: &Slot| -> Result<(), RunError> {
             let Launch::Spawn { exe, physics_fault } = launch else {
-                continue;
+                return Ok(());
             };
+            let args = all_args
+                .iter()
+                .find(|(k, a, _)| *k == kind && *a == agent)
+                .map(|(_, _, args)| args.clone())
+                .unwrap_or_default();
             let mut cmd = Command::new(exe);
             cmd.args(args)
-                .args(settings.component_args())
                 .args(
                     physics_fault
-                        .filter(|_| *kind == ComponentKind::Physics)
+                        .filter(|_| kind == ComponentKind::Physics)
                         .map(|f| ["--fault".to_string(), f.to_string()])
                         .into_iter()
                         .flatten(),
@@ -229,34 +229,30 @@ impl ProcessRun {
                 ))
             })?;
             *slot.lock().expect("child slot") = Some(child);
-        }
-        // `component_args` lists physics, then each agent's planner and controller.
-        let mut slots = slots.iter();
-        let mut next_slot = || slots.next().expect("one slot per component");
-        let mut physics = self.open(
-            node,
-            run,
-            (ComponentKind::Physics, 0),
-            next_slot(),
-            settings,
-        )?;
+            Ok(())
+        };
+        // Each link is opened before its process starts, so the process finds the
+        // services made (two processes creating one service at once cost the loser a
+        // 25 ms back-off in iceoryx2). The planners start first: planning the route is
+        // the longest start-up, and it overlaps the other links' set-up.
+        let agents = 0..spec.agents() as u32;
         let mut planners = Vec::new();
+        for k in agents.clone() {
+            let id = (ComponentKind::Planner, k);
+            let slot = self.slot(id);
+            planners.push(self.open(node, run, id, &slot, settings)?);
+            spawn(id, &slot)?;
+        }
+        let id = (ComponentKind::Physics, 0);
+        let slot = self.slot(id);
+        let mut physics = self.open(node, run, id, &slot, settings)?;
+        spawn(id, &slot)?;
         let mut controllers = Vec::new();
-        for k in 0..spec.agents() as u32 {
-            planners.push(self.open(
-                node,
-                run,
-                (ComponentKind::Planner, k),
-                next_slot(),
-                settings,
-            )?);
-            controllers.push(self.open(
-                node,
-                run,
-                (ComponentKind::Controller, k),
-                next_slot(),
-                settings,
-            )?);
+        for k in agents {
+            let id = (ComponentKind::Controller, k);
+            let slot = self.slot(id);
+            controllers.push(self.open(node, run, id, &slot, settings)?);
+            spawn(id, &slot)?;
         }
         let identity = spec.identity();
         physics.wait_ready(&identity)?;

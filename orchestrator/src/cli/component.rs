@@ -37,13 +37,6 @@ pub struct ComponentArgs {
     /// asked for TICK, `wrong-tick@TICK` answers TICK with another tick (physics only).
     #[arg(long, hide = true)]
     fault: Option<String>,
-    /// How long to poll for the next request before blocking \[us\] (the
-    /// orchestrator passes its `IpcSettings`).
-    #[arg(long, hide = true)]
-    ipc_poll_us: Option<u64>,
-    /// Time slice to ask the scheduler for \[us\]; 0 keeps the OS default.
-    #[arg(long, hide = true)]
-    ipc_slice_us: Option<u64>,
 }
 
 /// A deliberately broken physics component (reliability tests only).
@@ -116,14 +109,7 @@ pub fn run(args: ComponentArgs) -> anyhow::Result<ExitCode> {
         .map_err(|e| anyhow::anyhow!("creating the component's node: {e:?}"))?;
     let names = ServiceNames::new(&run, args.kind, args.agent);
     let identity = spec.identity();
-    let defaults = IpcSettings::default();
-    let settings = defaults.with_component_args(
-        args.ipc_poll_us
-            .unwrap_or(defaults.component_poll.as_micros() as u64),
-        args.ipc_slice_us
-            .unwrap_or(defaults.sched_slice.map_or(0, |s| s.as_micros() as u64)),
-    );
-    let settings = &settings;
+    let settings = &IpcSettings::default();
     let served = match args.kind {
         ComponentKind::Physics => {
             let inner = spec.physics(&scene)?;

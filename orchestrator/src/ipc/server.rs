@@ -10,7 +10,6 @@ use plamo_interfaces::{Component, ServiceNames, Tick};
 
 use super::envelope::{Envelope, EnvelopeKind};
 use super::error::IpcError;
-use super::sched::SliceHint;
 use super::setup::{Channels, IpcSettings};
 
 /// The orchestrator's node name; components watch for it.
@@ -70,7 +69,6 @@ where
         &names.response_event,
         &names.request_event,
     )?;
-    let _hint = SliceHint::request(settings.sched_slice);
     let mut served = 0u64;
     let mut idle_slices = 0u32;
     let mut idle_since = Instant::now();
@@ -83,11 +81,7 @@ where
         } else {
             settings.slice
         };
-        let frame = match ch.poll_within(settings.component_poll)? {
-            Some(frame) => Some(frame),
-            None => ch.receive_within(wait)?,
-        };
-        let Some(frame) = frame else {
+        let Some(frame) = ch.receive_within(wait)? else {
             if served == 0 {
                 ch.send(Envelope::ready(READY_TICK, identity))?;
             }

@@ -26,13 +26,6 @@ pub struct IpcSettings {
     /// 1.22x without, see BENCHMARKS.md). Default: 0.5 ms with 4 or more cores, else
     /// 0 (always block). Never changes results.
     pub poll: Duration,
-    /// How long a component polls for the next request before it blocks on the
-    /// orchestrator's wake-up event \[s\] (default 0: always block).
-    pub component_poll: Duration,
-    /// Time slice the orchestrator's and the components' threads ask the scheduler for
-    /// during a run (see [`SliceHint`](super::SliceHint)); `None` keeps the OS
-    /// default. Default 0.1 ms, the shortest Linux grants. Never changes results.
-    pub sched_slice: Option<Duration>,
     /// How long a component may take to come up and say it is ready (default 30 s).
     pub ready_timeout: Duration,
     /// How long one step may take before the component is declared hung (default 60 s).
@@ -54,33 +47,8 @@ impl Default for IpcSettings {
         Self {
             slice: Duration::from_millis(50),
             poll: default_poll(),
-            component_poll: Duration::ZERO,
-            sched_slice: Some(Duration::from_micros(100)),
             ready_timeout: Duration::from_secs(30),
             call_timeout: Duration::from_secs(60),
-        }
-    }
-}
-
-impl IpcSettings {
-    /// The `plamo component` options that hand a spawned component this run's
-    /// component-side settings.
-    pub fn component_args(&self) -> Vec<String> {
-        vec![
-            "--ipc-poll-us".into(),
-            self.component_poll.as_micros().to_string(),
-            "--ipc-slice-us".into(),
-            self.sched_slice.map_or(0, |s| s.as_micros()).to_string(),
-        ]
-    }
-
-    /// These settings with the component side's as `plamo component` got them
-    /// (`slice_us` 0: the OS default slice).
-    pub fn with_component_args(self, poll_us: u64, slice_us: u64) -> Self {
-        Self {
-            component_poll: Duration::from_micros(poll_us),
-            sched_slice: (slice_us > 0).then(|| Duration::from_micros(slice_us)),
-            ..self
         }
     }
 }
@@ -88,14 +56,35 @@ impl IpcSettings {
 /// Start of every file name plamo's runs leave under /dev/shm and the iceoryx2 root.
 pub const FILE_PREFIX: &str = "plamo_";
 
+/// Where plamo's runs keep iceoryx2's files (node and service descriptions, event
+/// sockets) where shared memory exists: iceoryx2 fsyncs every one of them, ~40 per
+/// run in the orchestrator alone, and on a disk (its default root, /tmp/iceoryx2)
+/// those took 0.2-11 ms each and made most of a multi-process run's start-up; on
+/// tmpfs an fsync costs nothing. Elsewhere iceoryx2's default root is kept.
+pub const SHM_ROOT: &str = "/dev/shm/plamo-iceoryx2/";
+
+/// The iceoryx2 root of plamo's runs: [`SHM_ROOT`] where /dev/shm exists, else
+/// iceoryx2's default.
+pub fn runtime_root() -> String {
+    if std::path::Path::new("/dev/shm").is_dir() {
+        SHM_ROOT.to_owned()
+    } else {
+        Config::default().global.root_path().to_string()
+    }
+}
+
 /// An iceoryx2 configuration whose file prefix isolates this run: two runs on one
 /// machine never open each other's shared memory. The prefix is `plamo_<run id>_`;
-/// `_` cannot occur in a run id, so a file name tells which run it belongs to.
+/// `_` cannot occur in a run id, so a file name tells which run it belongs to. Its
+/// files live under [`runtime_root`].
 pub fn run_config(run: &RunId) -> Result<Config, IpcError> {
     let mut cfg = Config::default();
     let prefix = format!("{FILE_PREFIX}{run}_");
     cfg.global.prefix =
         FileName::new(prefix.as_bytes()).map_err(setup(format!("prefix {prefix}")))?;
+    let root = runtime_root();
+    cfg.global
+        .set_root_path(&Path::new(root.as_bytes()).map_err(setup(format!("root {root}")))?);
     Ok(cfg)
 }
 

@@ -12,12 +12,19 @@ use iceoryx2::prelude::*;
 use plamo_interfaces::RunId;
 
 use super::liveness::end_run;
-use super::setup::{FILE_PREFIX, run_config};
+use super::setup::{FILE_PREFIX, run_config, runtime_root};
 
 /// Where iceoryx2 keeps a run's files: POSIX shared memory and its root directory.
+/// iceoryx2's default root too: runs of plamo versions that kept their files there
+/// may have crashed.
 fn roots() -> Vec<PathBuf> {
-    let root = Config::default().global.root_path().to_string();
-    vec![PathBuf::from("/dev/shm"), PathBuf::from(root)]
+    let default = Config::default().global.root_path().to_string();
+    let mut roots = vec![PathBuf::from("/dev/shm"), PathBuf::from(default)];
+    let ours = PathBuf::from(runtime_root());
+    if !roots.iter().any(|r| ours.starts_with(r)) {
+        roots.push(ours);
+    }
+    roots
 }
 
 /// Every plamo file on disk, by run id.
