@@ -121,14 +121,14 @@ fn long_run_with_components(run: &str, stderr: Stdio) -> Child {
     orch
 }
 
-#[test]
-fn in_process_and_multi_process_runs_are_bit_identical() {
-    let a = out_dir("inproc");
-    let b = out_dir("multi");
-    let args = ["--instructions", ROUTE, "--max-seconds", "3", "--seed", "7"];
-    let oa = run_ok(&args, &a);
+/// Run `args` in-process and as processes (run id `run`); the digests and recorded
+/// files must be identical and no file of the run left. Returns the in-process run.
+fn same_in_both_modes(args: &[&str], run: &str) -> Output {
+    let a = out_dir(&format!("{run}-inproc"));
+    let b = out_dir(&format!("{run}-multi"));
+    let oa = run_ok(args, &a);
     let mut margs = args.to_vec();
-    margs.extend(["--processes", "--run", "cli-test-det"]);
+    margs.extend(["--processes", "--run", run]);
     let ob = run_ok(&margs, &b);
     assert_eq!(digest(&oa), digest(&ob));
     for f in ["trajectory.csv", "obstacles.csv", "metrics.json"] {
@@ -139,7 +139,14 @@ fn in_process_and_multi_process_runs_are_bit_identical() {
         );
     }
     assert!(a.join("run.png").exists() && a.join("plans.json").exists());
-    assert_eq!(leftovers("cli-test-det"), Vec::<PathBuf>::new());
+    assert_eq!(leftovers(run), Vec::<PathBuf>::new());
+    oa
+}
+
+#[test]
+fn in_process_and_multi_process_runs_are_bit_identical() {
+    let args = ["--instructions", ROUTE, "--max-seconds", "3", "--seed", "7"];
+    let oa = same_in_both_modes(&args, "cli-test-det");
     // Another seed changes the start heading, so the trajectory.
     let c = out_dir("seed");
     let oc = run_ok(
@@ -147,6 +154,22 @@ fn in_process_and_multi_process_runs_are_bit_identical() {
         &c,
     );
     assert_ne!(digest(&oa), digest(&oc));
+}
+
+#[cfg(feature = "mujoco")]
+#[test]
+fn mujoco_in_process_and_multi_process_runs_are_bit_identical() {
+    let args = [
+        "--instructions",
+        ROUTE,
+        "--physics",
+        "mujoco",
+        "--max-seconds",
+        "3",
+        "--seed",
+        "7",
+    ];
+    same_in_both_modes(&args, "cli-test-det-mujoco");
 }
 
 #[test]
