@@ -3,14 +3,21 @@
 //! part of it.
 //!
 //! `cargo run --release -p plamo-controller --features mujoco --example crawl_sweep --
-//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc|trace]
-//! [terrains: flat,slope,rough,stairs]` (the sloped, rough and stair strips are the
-//! builtin `terrain-*` scenes `plamo eval locomotion` uses, from x 5, y 3).
+//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc|drop|rise|trace]
+//! [terrains: flat,slope,rough,stairs,ceiling]` (the sloped, rough and stair strips
+//! are the builtin `terrain-*` scenes `plamo eval locomotion` uses, from x 5, y 3;
+//! `ceiling` is flat with the crawl suite's 0.6 m ceiling). `drop`: the plan walks at
+//! the given speed (head 1.47 m, from rest at 1 m/s^2) and drops to the crawl's head
+//! height and 1 m/s at 4 s, the get-down from a walk. `rise`: straight, the plan rises
+//! to a standing head at 5 s (the get-up; a crawler still down counts as fallen). `PLAMO_SWEEP_HOLD=S`: the plan
+//! waits S seconds (straight paths), moving its point at rest to where the crawl's
+//! head ends after the get-down (0.7 m ahead of the standing head), so the errors measure the crawl's tracking, not
+//! the get-down's lag behind a plan that left at once.
 use std::error::Error;
 
 use plamo_controller::{
     ArcPath, ControllerSettings, CrawlParams, GaitParams, HeadPath, MetricsSummary,
-    ModelBasedController, StraightPath, flat_scene, run_path,
+    ModelBasedController, RisingPath, StraightPath, flat_scene, run_path,
 };
 use plamo_physics::BackendKind;
 use rayon::prelude::*;
@@ -30,6 +37,8 @@ fn main() -> Result<(), Box<dyn Error>> {
     let duration: f64 = arg(3, "10").parse()?;
     let runs: usize = arg(4, "4").parse()?;
     let arc = arg(5, "straight") == "arc";
+    let drop = arg(5, "straight") == "drop";
+    let rise = arg(5, "straight") == "rise";
     let settings = ControllerSettings {
         body_mass: plamo_physics::humanoid::total_mass(),
         ..Default::default()
@@ -43,6 +52,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     let crawl = match std::env::var_os("PLAMO_CRAWL_PARAMS") {
         Some(p) => CrawlParams::load(std::path::Path::new(&p))?,
         None => CrawlParams::default(),
+    };
+    let hold: f64 = match std::env::var("PLAMO_SWEEP_HOLD") {
+        Ok(v) => v.parse()?,
+        Err(_) => 0.0,
     };
     let terrains: Vec<String> = arg(6, "flat").split(',').map(String::from).collect();
     for terrain in &terrains {
@@ -59,6 +72,8 @@ fn main() -> Result<(), Box<dyn Error>> {
                         .unwrap();
                         let (scene, origin) = if terrain == "flat" {
                             (flat_scene(speed * duration + 10.0), [0.0, 0.0])
+                        } else if terrain == "ceiling" {
+                            (ceiling_scene(speed * duration + 10.0), [0.0, 0.0])
                         } else {
                             (
                                 plamo_scenes::builtin(&format!("terrain-{terrain}")).unwrap(),
@@ -69,7 +84,24 @@ fn main() -> Result<(), Box<dyn Error>> {
                             origin[0] + 0.37 * r as f64,
                             origin[1] + 0.1 * (r % 3) as f64 - 0.1,
                         ];
-                        let path: Box<dyn HeadPath> = if arc {
+                        let path: Box<dyn HeadPath> = if drop {
+                            Box::new(DropPath {
+                                start,
+                                walk_speed: speed,
+                                crawl_speed: 1.0,
+                                head_height: head,
+                                drop_at: 4.0,
+                            })
+                        } else if rise {
+                            Box::new(RisingPath {
+                                line: StraightPath {
+                                    start,
+                                    speed,
+                                    head_height: head,
+                                },
+                                up_at: 5.0,
+                            })
+                        } else if arc {
                             Box::new(ArcPath {
                                 start,
                                 speed,
@@ -78,10 +110,13 @@ fn main() -> Result<(), Box<dyn Error>> {
                                 radius: if r % 2 == 0 { 3.0 } else { -3.0 },
                             })
                         } else {
-                            Box::new(StraightPath {
-                                start,
-                                speed,
-                                head_height: head,
+                            Box::new(HeldPath {
+                                line: StraightPath {
+                                    start,
+                                    speed,
+                                    head_height: head,
+                                },
+                                hold,
                             })
                         };
                         run_path(
@@ -113,6 +148,102 @@ fn main() -> Result<(), Box<dyn Error>> {
     Ok(())
 }
 
+/// A straight plan that waits `hold` seconds at its start, moving its point (at rest)
+/// to where the crawl's head ends after the get-down.
+struct HeldPath {
+    line: StraightPath,
+    hold: f64,
+}
+
+impl HeadPath for HeldPath {
+    fn point(&self, scene: &plamo_scenes::Scene, t: f64) -> plamo_controller::Waypoint {
+        let mut w = self.line.at(scene, t - self.hold);
+        if self.hold > 0.0 {
+            // The head ends ~0.7 m ahead of the standing head after the get-down.
+            let s = (t / self.hold).clamp(0.0, 1.0);
+            w.x += 0.7 * s * s * (3.0 - 2.0 * s);
+        }
+        if t < self.hold {
+            w.v = 0.0;
+        }
+        w
+    }
+    fn direction(&self, _t: f64) -> [f64; 2] {
+        [1.0, 0.0]
+    }
+    fn head_height(&self) -> f64 {
+        self.line.head_height
+    }
+}
+
+/// A plan that walks from rest (accelerating at 1 m/s^2 to `walk_speed`, head 1.47 m)
+/// and, from `drop_at`, goes on at `crawl_speed` with the head at `head_height`.
+struct DropPath {
+    start: [f64; 2],
+    walk_speed: f64,
+    crawl_speed: f64,
+    head_height: f64,
+    drop_at: f64,
+}
+
+impl DropPath {
+    /// Distance along +X and speed at `t`.
+    fn travel(&self, t: f64) -> (f64, f64) {
+        let ramp = self.walk_speed;
+        let walk = |t: f64| {
+            if t < ramp {
+                (0.5 * t * t, t)
+            } else {
+                (self.walk_speed * (t - 0.5 * ramp), self.walk_speed)
+            }
+        };
+        let t = t.max(0.0);
+        if t < self.drop_at {
+            walk(t)
+        } else {
+            let (d, _) = walk(self.drop_at);
+            (d + self.crawl_speed * (t - self.drop_at), self.crawl_speed)
+        }
+    }
+}
+
+impl HeadPath for DropPath {
+    fn point(&self, scene: &plamo_scenes::Scene, t: f64) -> plamo_controller::Waypoint {
+        let (d, v) = self.travel(t);
+        let (x, y) = (self.start[0] + d, self.start[1]);
+        let head = if t < self.drop_at {
+            plamo_physics::humanoid::STANDING_HEAD_HEIGHT
+        } else {
+            self.head_height
+        };
+        plamo_controller::Waypoint {
+            x,
+            y,
+            z: scene.height_at(x, y) + head,
+            v,
+        }
+    }
+    fn direction(&self, _t: f64) -> [f64; 2] {
+        [1.0, 0.0]
+    }
+    fn head_height(&self) -> f64 {
+        self.head_height
+    }
+}
+
+/// A flat bench with a 0.6 m ceiling over x in [2.5, 4.5] m, 2 m wide (the crawl
+/// suite's, the playground's tunnel height).
+fn ceiling_scene(length: f64) -> plamo_scenes::Scene {
+    let mut scene = flat_scene(length);
+    scene.tops.push(plamo_scenes::TopObstacle {
+        name: "tunnel".into(),
+        footprint: plamo_scenes::Footprint::axis_aligned([3.5, 0.0], [1.0, 1.0]),
+        z_bottom: 0.6,
+        z_top: 0.8,
+    });
+    scene
+}
+
 /// One straight rollout, printing the head, pelvis and contacts every 0.25 s.
 fn trace(
     engine: BackendKind,
@@ -121,7 +252,7 @@ fn trace(
     duration: f64,
     settings: &ControllerSettings,
 ) -> Result<(), Box<dyn Error>> {
-    use plamo_controller::{Action, Observation, RisingPath, control_step};
+    use plamo_controller::{Action, Observation, control_step};
     use plamo_physics::{HumanoidPose, PhysicsSettings, create_backend};
     let crawl = match std::env::var_os("PLAMO_CRAWL_PARAMS") {
         Some(p) => CrawlParams::load(std::path::Path::new(&p))?,
@@ -142,16 +273,34 @@ fn trace(
         origin[0] + 0.37 * r as f64,
         origin[1] + 0.1 * (r % 3) as f64 - 0.1,
     ];
-    let path = RisingPath {
-        line: StraightPath {
+    // `PLAMO_TRACE_DROP_AT`: walk at `speed` and drop to the crawl then (see `drop`).
+    let path: Box<dyn HeadPath> = match std::env::var("PLAMO_TRACE_DROP_AT") {
+        Ok(v) => Box::new(DropPath {
             start,
-            speed,
+            walk_speed: speed,
+            crawl_speed: 1.0,
             head_height: head,
-        },
-        up_at: std::env::var("PLAMO_TRACE_UP_AT")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(f64::INFINITY),
+            drop_at: v.parse()?,
+        }),
+        Err(_) if std::env::var_os("PLAMO_SWEEP_HOLD").is_some() => Box::new(HeldPath {
+            line: StraightPath {
+                start,
+                speed,
+                head_height: head,
+            },
+            hold: std::env::var("PLAMO_SWEEP_HOLD")?.parse()?,
+        }),
+        Err(_) => Box::new(RisingPath {
+            line: StraightPath {
+                start,
+                speed,
+                head_height: head,
+            },
+            up_at: std::env::var("PLAMO_TRACE_UP_AT")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(f64::INFINITY),
+        }),
     };
     let mut physics = create_backend(engine, &scene, &PhysicsSettings::default())?;
     physics.reset(&HumanoidPose::standing_on(
@@ -166,11 +315,18 @@ fn trace(
     for c in 0..steps {
         let t = c as f64 / 30.0;
         let state = physics.state().clone();
+        let ground = scene.height_at(state.head[0], state.head[1]);
+        if settings.is_fallen(state.head[2] - ground, path.head_height()) {
+            println!(
+                "{engine:?} t {t:5.2} FALLEN (head {:.2} m above the ground)",
+                state.head[2] - ground
+            );
+        }
         // The trace below reads this step's observation and action.
         control_step(
             physics.as_mut(),
             &state,
-            &path,
+            path.as_ref(),
             &scene,
             t,
             &mut policy,
@@ -220,10 +376,13 @@ fn trace(
             let b = &state.body_pos;
             let w = policy.last_wrench();
             println!(
-                "{engine:?} t {t:5.2} head {:5.2} {:5.2} {:5.2} pelvis z {:4.2} pitch {:5.2} roll {:5.2} knees {:4.2} {:4.2} hands {:4.2} {:4.2} feet {:4.2} {:4.2} F {:5.0} {:5.0} {:5.0} T {:4.0} {:4.0} {:4.0} crawl {}",
+                "{engine:?} t {t:5.2} head {:5.2} {:5.2} {:5.2} yaw {:5.2} v {:5.2} {:5.2} pelvis z {:4.2} pitch {:5.2} roll {:5.2} knees {:4.2} {:4.2} hands {:4.2} {:4.2} feet {:4.2} {:4.2} F {:5.0} {:5.0} {:5.0} T {:4.0} {:4.0} {:4.0} crawl {}",
                 state.head[0] - path.point(&scene, t).x,
                 state.head[1] - path.point(&scene, t).y,
                 state.head[2],
+                state.heading(),
+                obs.root_lin_vel[0],
+                obs.root_lin_vel[1],
                 state.root_position[2],
                 (-obs.root_rotation[2]).asin(),
                 obs.root_rotation[5].asin(),

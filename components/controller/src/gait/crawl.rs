@@ -12,7 +12,13 @@
 //!   lifted over the local height map. Phase offsets and duty factor make the
 //!   sequence (a lateral-sequence walk keeps three limbs down).
 //! - The plan's next waypoint gives the desired velocity (rate-limited), its
-//!   direction the yaw rate; the cycle shortens with speed so strides stay short.
+//!   direction the yaw rate; the cycle shortens with speed so strides stay short, and
+//!   the duty factor falls from `duty` at rest to `fast_duty` at `max_speed`.
+//! - Speed feedback: contacts slip, so the stance limbs sweep back at the desired
+//!   velocity plus the integral of what the (low-passed) measured velocity lacks
+//!   (`slip_gain`, bounded); a swing limb lands further ahead when the body is faster
+//!   than desired (`place_gain`), and the sweep slows while the body pitches onto its
+//!   head (`dive_slowdown`).
 //! - Terrain: each contact's height comes from the local height map; the desired
 //!   pelvis height follows the mean ground under the contacts.
 //! - Getting down and up are joint-space blends over a fixed time from the joint
@@ -86,8 +92,28 @@ pub struct CrawlParams {
     pub min_cycle: f64,
     /// Longest stride of one limb \[m\].
     pub max_stride: f64,
-    /// Fraction of the cycle a limb is on the ground \[-\].
+    /// Fraction of the cycle a limb is on the ground at rest \[-\].
     pub duty: f64,
+    /// Fraction of the cycle a limb is on the ground at `max_speed` (linear in between):
+    /// a shorter stance leaves the swinging limbs time to reach ahead at speed \[-\].
+    pub fast_duty: f64,
+    /// Integral gain of the slip compensation \[1/s\]: the stance limbs sweep back
+    /// faster than the desired velocity by the integrated shortfall of the measured
+    /// one (contacts slip and the body lags what the limbs' kinematics promise).
+    pub slip_gain: f64,
+    /// Largest slip compensation \[m/s\].
+    pub max_slip: f64,
+    /// Share of the gait speed given up per rad of forward pitch beyond
+    /// `dive_margin` \[1/rad\]: a body pitching onto its head stops sweeping its limbs
+    /// back until the front is up again.
+    pub dive_slowdown: f64,
+    /// Forward pitch error tolerated at full speed \[rad\].
+    pub dive_margin: f64,
+    /// Time constant of the low-pass on the measured root velocity \[s\].
+    pub vel_filter: f64,
+    /// Swing landing point ahead per m/s of (filtered) velocity above the desired one
+    /// \[s\] (Raibert-style placement: a limb landing further ahead brakes).
+    pub place_gain: f64,
     /// Phase offsets: right knee, left knee, right hand, left hand \[-\].
     pub offsets: [f64; 4],
     /// Swing lift of the knees \[m\].
@@ -104,6 +130,12 @@ pub struct CrawlParams {
     pub max_speed: f64,
     /// Time to get down from standing \[s\].
     pub down_time: f64,
+    /// Hands reach ahead per m/s of forward velocity while getting down \[s\].
+    pub down_reach: f64,
+    /// Speed above which the biped brakes before getting down \[m/s\].
+    pub down_speed: f64,
+    /// Longest the biped brakes before getting down anyway \[s\].
+    pub brake_time: f64,
     /// Time to get up into standing \[s\].
     pub up_time: f64,
     /// Backward speed the residual asks for while sitting back into the squat on the
@@ -177,7 +209,7 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 41] = [
+        let ranges: [(&'static str, f64, f64, f64); 51] = [
             ("up_squat_hip", self.up_squat_hip, -2.4, 0.6),
             ("up_squat_knee", self.up_squat_knee, 0.0, 2.7),
             ("sit_back_speed", self.sit_back_speed, 0.0, 2.0),
@@ -207,6 +239,13 @@ impl CrawlParams {
             ("min_cycle", self.min_cycle, 0.1, 5.0),
             ("max_stride", self.max_stride, 0.0, 0.6),
             ("duty", self.duty, 0.3, 0.95),
+            ("fast_duty", self.fast_duty, 0.3, 0.95),
+            ("slip_gain", self.slip_gain, 0.0, 20.0),
+            ("max_slip", self.max_slip, 0.0, 2.0),
+            ("dive_slowdown", self.dive_slowdown, 0.0, 20.0),
+            ("dive_margin", self.dive_margin, 0.0, 1.0),
+            ("vel_filter", self.vel_filter, 0.01, 2.0),
+            ("place_gain", self.place_gain, 0.0, 1.0),
             ("knee_lift", self.knee_lift, 0.0, 0.3),
             ("hand_lift", self.hand_lift, 0.0, 0.3),
             ("yaw_gain", self.yaw_gain, 0.0, 10.0),
@@ -214,6 +253,9 @@ impl CrawlParams {
             ("max_accel", self.max_accel, 0.01, 20.0),
             ("max_speed", self.max_speed, 0.0, 5.0),
             ("down_time", self.down_time, 0.1, 10.0),
+            ("down_reach", self.down_reach, 0.0, 1.0),
+            ("down_speed", self.down_speed, 0.0, 10.0),
+            ("brake_time", self.brake_time, 0.0, 5.0),
             ("up_time", self.up_time, 0.1, 10.0),
             ("vel_gain", self.vel_gain, 0.0, 50.0),
             ("height_gain", self.height_gain, 0.0, 500.0),
@@ -428,6 +470,10 @@ pub(crate) struct CrawlGait {
     in_swing: [bool; LIMBS],
     /// Rate-limited desired velocity, heading frame \[m/s\].
     v_cmd: [f64; 2],
+    /// Low-passed measured root velocity, heading frame \[m/s\].
+    v_filt: [f64; 2],
+    /// Slip compensation added to the stance limbs' sweep, heading frame \[m/s\].
+    v_slip: [f64; 2],
     last_wrench: RootWrench,
 }
 
@@ -453,6 +499,8 @@ impl CrawlGait {
             lift_off: [[0.0; 2]; LIMBS],
             in_swing: [false; LIMBS],
             v_cmd: [0.0; 2],
+            v_filt: [0.0; 2],
+            v_slip: [0.0; 2],
             last_wrench: RootWrench::default(),
         }
     }
@@ -492,6 +540,8 @@ impl CrawlGait {
         self.offset = [[0.0; 2]; LIMBS];
         self.in_swing = [false; LIMBS];
         self.v_cmd = [obs.root_lin_vel[0], obs.root_lin_vel[1]];
+        self.v_filt = self.v_cmd;
+        self.v_slip = [0.0; 2];
     }
 
     /// Starts standing up.
@@ -708,11 +758,22 @@ impl CrawlGait {
             Mode::Down { t, pitch0, height0 } => {
                 let s = smoothstep(t / p.down_time);
                 let mut crawl = [0.0; NUM_JOINTS];
-                let contacts = self.grounded(obs, &nominal);
+                // Hands reach further ahead the faster the body still moves, so the
+                // arms brake it instead of the body rolling over them onto its head.
+                let mut reach = nominal;
+                for hand in &mut reach[2..] {
+                    hand[0] += p.down_reach * vx.max(0.0);
+                }
+                let contacts = self.grounded(obs, &reach);
                 self.pose_targets(&f, &contacts, [0.0; 2], &mut crawl);
                 self.through_squat(false, &self.from, &crawl, t / p.down_time, targets);
                 let t = t + CONTROL_DT;
                 self.mode = if t >= p.down_time {
+                    // The crawl starts from rest (its desired velocity ramps up): the
+                    // velocity at the switch (a walk's) is long gone, and sweeping the
+                    // limbs at it pitched the body onto its head.
+                    self.v_cmd = [0.0; 2];
+                    self.v_filt = [vx, vy];
                     Mode::Crawl
                 } else {
                     Mode::Down { t, pitch0, height0 }
@@ -763,18 +824,35 @@ impl CrawlGait {
                     *c += (want - *c).clamp(-dv, dv);
                 }
                 let yaw_rate = (p.yaw_gain * heading_err).clamp(-p.max_yaw_rate, p.max_yaw_rate);
-                let speed = self.v_cmd[0].hypot(self.v_cmd[1]);
-                let cycle = (p.max_stride / (speed * p.duty).max(1e-6)).clamp(p.min_cycle, p.cycle);
+                let a = (CONTROL_DT / p.vel_filter).min(1.0);
+                for k in 0..2 {
+                    self.v_filt[k] += a * ([vx, vy][k] - self.v_filt[k]);
+                    self.v_slip[k] = (self.v_slip[k]
+                        + p.slip_gain * (self.v_cmd[k] - self.v_filt[k]) * CONTROL_DT)
+                        .clamp(-p.max_slip, p.max_slip);
+                }
+                // What the stance limbs sweep back at: the desired velocity plus what
+                // slipped, less while the body pitches onto its head.
+                let dive = (pitch - f.pelvis_pitch - p.dive_margin).max(0.0);
+                let keep = (1.0 - p.dive_slowdown * dive).clamp(0.0, 1.0);
+                let v_gait = [
+                    keep * (self.v_cmd[0] + self.v_slip[0]),
+                    keep * (self.v_cmd[1] + self.v_slip[1]),
+                ];
+                let speed = v_gait[0].hypot(v_gait[1]);
+                let fast = (self.v_cmd[0].hypot(self.v_cmd[1]) / p.max_speed.max(1e-6)).min(1.0);
+                let duty = p.duty + fast * (p.fast_duty - p.duty);
+                let cycle = (p.max_stride / (speed * duty).max(1e-6)).clamp(p.min_cycle, p.cycle);
                 self.phase = (self.phase + CONTROL_DT / cycle).fract();
-                let stance_time = cycle * p.duty;
+                let stance_time = cycle * duty;
                 let mut xy = [[0.0; 2]; LIMBS];
                 let mut lift = [0.0; LIMBS];
                 for i in 0..LIMBS {
                     let local = (self.phase - p.offsets[i]).rem_euclid(1.0);
                     // Contact velocity relative to the body: -(v + w x r).
                     let [nx, ny] = nominal[i];
-                    let vel = [self.v_cmd[0] - yaw_rate * ny, self.v_cmd[1] + yaw_rate * nx];
-                    if local < p.duty {
+                    let vel = [v_gait[0] - yaw_rate * ny, v_gait[1] + yaw_rate * nx];
+                    if local < duty {
                         self.in_swing[i] = false;
                         for (o, v) in self.offset[i].iter_mut().zip(vel) {
                             *o -= v * CONTROL_DT;
@@ -784,11 +862,12 @@ impl CrawlGait {
                             self.in_swing[i] = true;
                             self.lift_off[i] = self.offset[i];
                         }
-                        let s_lin = ((local - p.duty) / (1.0 - p.duty)).min(1.0);
-                        let s = smoothstep(s_lin + CONTROL_DT / (cycle * (1.0 - p.duty)));
-                        for ((o, v), l) in self.offset[i].iter_mut().zip(vel).zip(self.lift_off[i])
-                        {
-                            let land = 0.5 * v * stance_time;
+                        let s_lin = ((local - duty) / (1.0 - duty)).min(1.0);
+                        let s = smoothstep(s_lin + CONTROL_DT / (cycle * (1.0 - duty)));
+                        for (k, (o, v)) in self.offset[i].iter_mut().zip(vel).enumerate() {
+                            let land = 0.5 * v * stance_time
+                                + p.place_gain * (self.v_filt[k] - self.v_cmd[k]);
+                            let l = self.lift_off[i][k];
                             *o = l + s * (land - l);
                         }
                         let h = if i < 2 { p.knee_lift } else { p.hand_lift };
@@ -856,6 +935,8 @@ impl CrawlGait {
         self.offset = [[0.0; 2]; LIMBS];
         self.in_swing = [false; LIMBS];
         self.v_cmd = [0.0; 2];
+        self.v_filt = [0.0; 2];
+        self.v_slip = [0.0; 2];
     }
 }
 

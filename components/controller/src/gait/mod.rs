@@ -19,7 +19,7 @@ use plamo_physics::{NUM_BODIES, NUM_JOINTS};
 
 use crate::error::{ControllerError, Result};
 use crate::math::{clamp_norm, from_heading_frame};
-use crate::observation::{Observation, ObservationLayout, WAYPOINT_SPACING};
+use crate::observation::{NUM_WAYPOINTS, Observation, ObservationLayout, WAYPOINT_SPACING};
 use crate::policy::{Action, Policy, RootWrench};
 use crate::settings::{ControllerSettings, GRAVITY};
 use biped::BipedGait;
@@ -66,6 +66,10 @@ pub struct ModelBasedController {
     crawl: CrawlGait,
     /// Whether the crawl gait (including its get-down and get-up) is in charge.
     crawling: bool,
+    /// How long the biped has been braking for a get-down \[s\].
+    braking: f64,
+    /// The observation the biped brakes on (the plan held at the head).
+    brake_obs: Observation,
 }
 
 impl ModelBasedController {
@@ -98,6 +102,8 @@ impl ModelBasedController {
             crawl: CrawlGait::new(crawl, settings.clone()),
             biped: BipedGait::new(params, settings),
             crawling: false,
+            braking: 0.0,
+            brake_obs: Observation::new(Self::LAYOUT),
         })
     }
 
@@ -139,7 +145,23 @@ impl Policy for ModelBasedController {
         let requested = obs.root_height + obs.head_pos[2] + obs.waypoints[0][2];
         let p = self.crawl.params();
         let (below, above) = (p.crawl_below, p.stand_above);
+        if requested >= below {
+            self.braking = 0.0;
+        }
         if !self.crawling && requested < below {
+            // Getting down at a walk pitches the body onto its head before the hands
+            // are down: the biped first brakes (the plan held at the head) to
+            // `down_speed`, for at most `brake_time`.
+            let speed = obs.root_lin_vel[0].hypot(obs.root_lin_vel[1]);
+            if speed > p.down_speed && self.braking < p.brake_time {
+                self.braking += plamo_interfaces::CONTROL_DT;
+                self.brake_obs.clone_from(obs);
+                self.brake_obs.waypoints = [[0.0; 3]; NUM_WAYPOINTS];
+                self.brake_obs.waypoint_speeds = [0.0; NUM_WAYPOINTS];
+                self.biped.act(&self.brake_obs, out);
+                return Ok(());
+            }
+            self.braking = 0.0;
             self.crawling = true;
             self.crawl.begin_down(obs);
         } else if self.crawling {
@@ -166,6 +188,7 @@ impl Policy for ModelBasedController {
         self.biped.reset();
         self.crawl.reset();
         self.crawling = false;
+        self.braking = 0.0;
     }
 
     fn name(&self) -> &str {
