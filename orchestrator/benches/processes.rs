@@ -109,6 +109,13 @@ fn variants() -> Vec<(&'static str, IpcSettings)> {
     vec![
         ("processes (default)", default),
         (
+            "processes, not pinned",
+            IpcSettings {
+                one_core: false,
+                ..default
+            },
+        ),
+        (
             "processes, poll 30 us",
             IpcSettings {
                 poll: Duration::from_micros(30),

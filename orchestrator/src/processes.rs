@@ -14,8 +14,8 @@ use iceoryx2::prelude::*;
 use plamo_interfaces::{ComponentKind, RunId, ServiceNames};
 
 use crate::ipc::{
-    IpcError, IpcSettings, RemoteComponent, StaleRun, clean_stale_runs, dead_nodes, end_run,
-    run_config,
+    CorePin, IpcError, IpcSettings, RemoteComponent, StaleRun, clean_stale_runs, dead_nodes,
+    end_run, run_config,
 };
 use crate::lockstep::{Link, Links, RunError};
 use crate::spec::RunSpec;
@@ -51,6 +51,9 @@ pub struct ProcessRun {
     cfg: Config,
     node: Option<Node<ipc::Service>>,
     children: Vec<(String, Arc<Mutex<Option<Child>>>)>,
+    /// The orchestrator thread's core pin, which the spawned components inherit;
+    /// held for the run (so drop the run on the thread that started it).
+    _pin: CorePin,
     /// Runs that had crashed earlier (any run id) whose files were removed at start.
     pub cleaned: Vec<StaleRun>,
 }
@@ -124,6 +127,7 @@ impl ProcessRun {
         launch: Launch<'_>,
         settings: IpcSettings,
     ) -> Result<(Self, Links), RunError> {
+        let pin = CorePin::here(settings.one_core);
         let cfg = run_config(run)?;
         // Crashed earlier runs (this id or any other) may have left files behind.
         let cleaned = clean_stale_runs(STARTUP_GRACE);
@@ -137,6 +141,7 @@ impl ProcessRun {
             cfg,
             node: None,
             children: Vec::new(),
+            _pin: pin,
             cleaned,
         };
         let result = this.spawn_all(&node, spec, run, launch, settings);

@@ -7,6 +7,7 @@
 //! (iceoryx2 pub/sub has no blocking receive), and waits happen in short slices so a
 //! dead peer is noticed (a SIGKILLed process is not signalled).
 
+mod affinity;
 mod client;
 mod envelope;
 mod error;
@@ -15,6 +16,7 @@ mod server;
 mod setup;
 mod stale;
 
+pub use affinity::CorePin;
 pub use client::RemoteComponent;
 pub use envelope::{Envelope, EnvelopeKind};
 pub use error::IpcError;

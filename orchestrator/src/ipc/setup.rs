@@ -26,6 +26,10 @@ pub struct IpcSettings {
     /// 1.22x without, see BENCHMARKS.md). Default: 0.5 ms with 4 or more cores, else
     /// 0 (always block). Never changes results.
     pub poll: Duration,
+    /// Run the orchestrator's thread and the component processes it spawns on one
+    /// core, the one the run starts on (see [`CorePin`](super::CorePin)). Default
+    /// true. Never changes results.
+    pub one_core: bool,
     /// How long a component may take to come up and say it is ready (default 30 s).
     pub ready_timeout: Duration,
     /// How long one step may take before the component is declared hung (default 60 s).
@@ -47,6 +51,7 @@ impl Default for IpcSettings {
         Self {
             slice: Duration::from_millis(50),
             poll: default_poll(),
+            one_core: true,
             ready_timeout: Duration::from_secs(30),
             call_timeout: Duration::from_secs(60),
         }
