@@ -19,11 +19,10 @@ pub struct IpcSettings {
     /// Length of one wait before liveness is checked again \[s\] (default 0.05 s).
     pub slice: Duration,
     /// How long the orchestrator polls for a reply before it blocks on the peer's
-    /// wake-up event \[s\]. In lockstep only one component computes at a time, so
-    /// on a machine with spare cores polling saves the scheduler's wake-up latency
-    /// (tens of us) on every call; on a small, loaded machine it takes the core the
-    /// component needs (measured on 2 cores at load 6: rapier 1.52x with polling vs
-    /// 1.22x without, see BENCHMARKS.md). Default: 0.5 ms with 4 or more cores, else
+    /// wake-up event \[s\]. Polling can only pay with `one_core` off and a core
+    /// free for it while a component computes; pinned to one core it holds the core
+    /// the component needs (MuJoCo 1.5x with a 30 us poll vs 1.2x blocking, and
+    /// unpinned on 2 loaded cores rapier 1.52x vs 1.22x, see BENCHMARKS.md). Default
     /// 0 (always block). Never changes results.
     pub poll: Duration,
     /// Run the orchestrator's thread and the component processes it spawns on one
@@ -36,21 +35,11 @@ pub struct IpcSettings {
     pub call_timeout: Duration,
 }
 
-/// Poll only where a core is free for it while a component computes.
-fn default_poll() -> Duration {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    if cores >= 4 {
-        Duration::from_micros(500)
-    } else {
-        Duration::ZERO
-    }
-}
-
 impl Default for IpcSettings {
     fn default() -> Self {
         Self {
             slice: Duration::from_millis(50),
-            poll: default_poll(),
+            poll: Duration::ZERO,
             one_core: true,
             ready_timeout: Duration::from_secs(30),
             call_timeout: Duration::from_secs(60),
