@@ -192,6 +192,10 @@ pub struct TuneSettings {
     pub sigma0: f64,
     /// Controller settings (residual caps) used in the rollouts.
     pub controller: ControllerSettings,
+    /// Ground of the rollouts, assigned round-robin: `flat` or the name of a built-in
+    /// terrain strip without its `terrain-` prefix (`slope`, `rough`, `stairs`; the
+    /// strips of `plamo eval locomotion`).
+    pub terrains: Vec<String>,
 }
 
 /// Cost per unit of mean residual force (fraction of m*g) \[m-equivalent\]: 0.1 m*g
@@ -227,6 +231,21 @@ pub struct Generation {
     pub sigma: f64,
 }
 
+/// The ground named `name` and where a rollout starts on it: a flat plane, or a built-in
+/// terrain strip (x 5 -> 35 m), started where `plamo eval locomotion` starts.
+pub fn terrain_scene(name: &str) -> Result<(plamo_scenes::Scene, [f64; 2])> {
+    if name == "flat" {
+        return Ok((flat_scene(60.0), [0.0, 0.0]));
+    }
+    let scene = plamo_scenes::builtin(&format!("terrain-{name}")).map_err(|e| {
+        ControllerError::InvalidSettings {
+            field: "terrains",
+            reason: format!("unknown terrain `{name}` (flat, slope, rough, stairs): {e}"),
+        }
+    })?;
+    Ok((scene, [5.0, 3.0]))
+}
+
 /// Evaluates `params` on the scenarios drawn for `seed` (same seed, same scenarios).
 pub fn evaluate(params: &GaitParams, s: &TuneSettings, seed: u64) -> Result<Cost> {
     let (head, [lo, hi]) = s.form.task();
@@ -241,22 +260,34 @@ pub fn evaluate(params: &GaitParams, s: &TuneSettings, seed: u64) -> Result<Cost
             (b, lo + (hi - lo) * (i as f64 + rng.uniform()) / k)
         })
         .collect();
+    let grounds = s
+        .terrains
+        .iter()
+        .map(|t| terrain_scene(t))
+        .collect::<Result<Vec<_>>>()?;
+    if grounds.is_empty() {
+        return Err(ControllerError::InvalidSettings {
+            field: "terrains",
+            reason: "no terrain to tune on (flat, slope, rough, stairs)".into(),
+        });
+    }
     let results: Vec<Result<Cost>> = jobs
         .par_iter()
-        .map(|&(backend, speed)| {
+        .enumerate()
+        .map(|(k, &(backend, speed))| {
             let mut policy = ModelBasedController::with_params(*params, s.controller.clone())?;
+            let (scene, start) = &grounds[(k % s.rollouts.max(1)) % grounds.len()];
             let path = RampedPath {
                 line: StraightPath {
-                    start: [0.0, 0.0],
+                    start: *start,
                     speed,
                     head_height: head,
                 },
                 accel: START_ACCEL,
             };
-            let scene = flat_scene(speed * s.duration + 5.0);
             let m = run_path(
                 backend,
-                &scene,
+                scene,
                 &path,
                 s.duration,
                 &mut policy,

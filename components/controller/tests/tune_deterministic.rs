@@ -6,8 +6,8 @@
 use plamo_controller::{ControllerSettings, Form, GaitParams, TuneSettings, to_toml, tune};
 use plamo_physics::BackendKind;
 
-fn run(seed: u64) -> (String, f64) {
-    let settings = TuneSettings {
+fn settings(seed: u64, terrain: &str) -> TuneSettings {
+    TuneSettings {
         form: Form::Walk,
         generations: 1,
         seed,
@@ -19,7 +19,13 @@ fn run(seed: u64) -> (String, f64) {
             body_mass: plamo_physics::humanoid::total_mass(),
             ..Default::default()
         },
-    };
+        // A terrain strip, so the scenario's ground comes from the built-in scenes.
+        terrains: vec![terrain.into()],
+    }
+}
+
+fn run(seed: u64) -> (String, f64) {
+    let settings = settings(seed, "rough");
     let mut generations = 0;
     let (best, cost) = tune(&GaitParams::default(), &settings, |_| generations += 1).unwrap();
     assert_eq!(generations, 1);
@@ -36,4 +42,14 @@ fn tuning_is_deterministic_per_seed() {
     GaitParams::from_toml(&a.0, std::path::Path::new("tuned.toml")).unwrap();
     let c = run(4);
     assert!(a.0 != c.0 || a.1 != c.1, "seed changes nothing");
+}
+
+#[test]
+fn an_unknown_terrain_is_an_error_that_lists_the_known_ones() {
+    let err = tune(&GaitParams::default(), &settings(1, "ruff"), |_| {}).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("`ruff`") && msg.contains("rough") && msg.contains("stairs"),
+        "{msg}"
+    );
 }
