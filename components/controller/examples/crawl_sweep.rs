@@ -261,6 +261,7 @@ fn trace(
     let mut policy =
         ModelBasedController::with_all_params(GaitParams::default(), crawl, settings.clone())?;
     let (scene, origin) = match std::env::var("PLAMO_TRACE_TERRAIN") {
+        Ok(t) if t == "ceiling" => (ceiling_scene(speed * duration + 10.0), [0.0, 0.0]),
         Ok(t) if t != "flat" => (plamo_scenes::builtin(&format!("terrain-{t}"))?, [5.0, 3.0]),
         _ => (flat_scene(speed * duration + 10.0), [0.0, 0.0]),
     };
