@@ -9,8 +9,9 @@
 //! (11 alternating rounds, full route), rapier 1.07x vs 1.33x (3 rounds, 60 s). Linux
 //! only; elsewhere nothing is pinned.
 
-/// The calling thread's CPU set before it was pinned; restored on drop. Processes the
-/// thread spawns meanwhile inherit the pin.
+/// The calling thread's CPU set before it was pinned; restored on drop. Processes and
+/// threads the thread starts meanwhile inherit the pin (a thread pool first used
+/// during a pinned run stays on that core).
 #[derive(Debug)]
 pub struct CorePin {
     #[cfg(target_os = "linux")]

@@ -23,8 +23,15 @@ pub const READY_TICK: u64 = u64::MAX;
 /// costly to pay on every request of a fast lockstep.
 const TERMINATION_EVERY: u64 = 64;
 
-/// How often a component repeats its ready frame until the first request.
+/// How often a component repeats its ready frame in its first [`READY_FAST_FOR`]
+/// while no request came, then once per wait slice.
 const READY_REPEAT: Duration = Duration::from_millis(1);
+
+/// How long a component repeats its ready frame every [`READY_REPEAT`]: an
+/// orchestrator that opened its link after the component's first frame (one started
+/// by hand before it) hears from it within a millisecond, and a component waiting
+/// longer for its turn (`--attach`) does not send a thousand frames a second.
+const READY_FAST_FOR: Duration = Duration::from_millis(200);
 
 /// How often an idle component looks for its orchestrator.
 const LIVENESS_EVERY: u32 = 4;
@@ -72,11 +79,12 @@ where
     let mut served = 0u64;
     let mut idle_slices = 0u32;
     let mut idle_since = Instant::now();
+    let started = idle_since;
     ch.send(Envelope::ready(READY_TICK, identity))?;
     loop {
         // Until the first request the orchestrator may not have its ports yet:
-        // announce again every millisecond (it drops the duplicates).
-        let wait = if served == 0 {
+        // announce again (it drops the duplicates).
+        let wait = if served == 0 && started.elapsed() < READY_FAST_FOR {
             READY_REPEAT.min(settings.slice)
         } else {
             settings.slice
