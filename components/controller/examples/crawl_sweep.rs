@@ -17,7 +17,7 @@ use std::error::Error;
 
 use plamo_controller::{
     ArcPath, ControllerSettings, CrawlParams, GaitParams, HeadPath, MetricsSummary,
-    ModelBasedController, RisingPath, StraightPath, flat_scene, run_path,
+    ModelBasedController, RisingPath, StraightPath, ceiling_scene, flat_scene, run_path,
 };
 use plamo_physics::BackendKind;
 use rayon::prelude::*;
@@ -229,19 +229,6 @@ impl HeadPath for DropPath {
     fn head_height(&self) -> f64 {
         self.head_height
     }
-}
-
-/// A flat bench with a 0.6 m ceiling over x in [2.5, 4.5] m, 2 m wide (the crawl
-/// suite's, the playground's tunnel height).
-fn ceiling_scene(length: f64) -> plamo_scenes::Scene {
-    let mut scene = flat_scene(length);
-    scene.tops.push(plamo_scenes::TopObstacle {
-        name: "tunnel".into(),
-        footprint: plamo_scenes::Footprint::axis_aligned([3.5, 0.0], [1.0, 1.0]),
-        z_bottom: 0.6,
-        z_top: 0.8,
-    });
-    scene
 }
 
 /// One straight rollout, printing the head, pelvis and contacts every 0.25 s.

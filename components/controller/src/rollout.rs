@@ -225,6 +225,19 @@ pub fn flat_scene(length: f64) -> Scene {
     }
 }
 
+/// A [`flat_scene`] with a 0.6 m ceiling (the playground's tunnel height) over x in
+/// \[2.5, 4.5\] m, 2 m wide: the bench for crawling under a low top.
+pub fn ceiling_scene(length: f64) -> Scene {
+    let mut scene = flat_scene(length);
+    scene.tops.push(plamo_scenes::TopObstacle {
+        name: "tunnel".into(),
+        footprint: plamo_scenes::Footprint::axis_aligned([3.5, 0.0], [1.0, 1.0]),
+        z_bottom: 0.6,
+        z_top: 0.8,
+    });
+    scene
+}
+
 /// Runs `policy` along `path` for `duration` \[s\] with the chosen physics engine. A
 /// fall is counted, and the humanoid is put back standing on the plan's current
 /// point (ProtoMotions-style reset).

@@ -6,7 +6,8 @@
 
 use plamo_controller::{
     Action, ArcPath, ControllerSettings, HeadPath, MetricsSummary, ModelBasedController,
-    Observation, RisingPath, StraightPath, Waypoint, control_step, flat_scene, run_path,
+    Observation, RisingPath, StraightPath, Waypoint, ceiling_scene, control_step, flat_scene,
+    run_path,
 };
 use plamo_physics::{BackendKind, HumanoidPose, PhysicsSettings, create_backend};
 
@@ -71,19 +72,6 @@ fn bounds(kind: BackendKind) -> Bounds {
 
 fn crawl(kind: BackendKind, path: &dyn HeadPath, duration: f64) -> MetricsSummary {
     crawl_in(kind, &flat_scene(SPEED * duration + 5.0), path, duration)
-}
-
-/// A flat bench with a 0.6 m ceiling over x in [2.5, 4.5] m (the playground's tunnel
-/// height), 2 m wide.
-fn ceiling_scene(length: f64) -> plamo_scenes::Scene {
-    let mut scene = flat_scene(length);
-    scene.tops.push(plamo_scenes::TopObstacle {
-        name: "tunnel".into(),
-        footprint: plamo_scenes::Footprint::axis_aligned([3.5, 0.0], [1.0, 1.0]),
-        z_bottom: 0.6,
-        z_top: 0.8,
-    });
-    scene
 }
 
 fn crawl_in(
