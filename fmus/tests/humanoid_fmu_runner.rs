@@ -109,7 +109,8 @@ fn fmu_runner_outputs_equal_the_in_process_lockstep_bit_for_bit() {
     reference.set_external_obstacles(&externals(0.0)).unwrap();
 
     let (mut t, mut finished, mut points, mut max_instruction) = (0.0_f64, false, 0, 0);
-    // Digest of the reference at COMPARE_TICK, to show the ball reached the planner.
+    // Digest of the reference at COMPARE_TICK or where it finishes, whichever comes
+    // first, to show the ball reached the planner.
     let mut digest_with_ball = None;
     loop {
         let expected = reference_outputs(&reference, finished, count);
@@ -138,7 +139,7 @@ fn fmu_runner_outputs_equal_the_in_process_lockstep_bit_for_bit() {
                 StepStatus::Running => {}
                 _ => finished = true,
             }
-            if reference.tick().0 == COMPARE_TICK {
+            if digest_with_ball.is_none() && (finished || reference.tick().0 >= COMPARE_TICK) {
                 digest_with_ball = Some(reference.digest());
             }
         }
@@ -151,16 +152,28 @@ fn fmu_runner_outputs_equal_the_in_process_lockstep_bit_for_bit() {
     );
     assert!(points > 500, "{points} communication points compared");
     drop(inst);
+    // A finished run stays finished: stepping it again changes nothing (it used to
+    // re-plan on every call without advancing, so a loop on its tick never ended).
+    assert!(finished, "the reference finished with the FMU");
+    let (tick, digest) = (reference.tick().0, reference.digest());
+    assert_eq!(reference.step().unwrap(), StepStatus::Finished);
+    assert_eq!(reference.tick().0, tick);
+    assert!(reference.digest() == digest, "a finished run changed");
 
     // Physics does not collide with host obstacles, so the ball can only change the
     // run through the planner's re-planning: without it the run must differ.
     let (mut no_ball, _) = route_lockstep(3);
     no_ball.set_external_obstacles(&[PARKED_SAMPLE; 4]).unwrap();
+    // The same stopping rule as the reference's: a route that finishes earlier stops
+    // there (stepping a finished lockstep again does not advance its tick).
     while no_ball.tick().0 < COMPARE_TICK {
-        no_ball.step().unwrap();
+        if no_ball.step().unwrap() != StepStatus::Running {
+            break;
+        }
     }
+    let digest_with_ball = digest_with_ball.expect("the reference ran to its compare point");
     assert_ne!(
-        Some(no_ball.digest()),
+        no_ball.digest(),
         digest_with_ball,
         "the host's ball changed nothing: it never reached the planner"
     );

@@ -134,11 +134,15 @@ impl Lockstep {
         })
     }
 
-    /// One control step from the current tick (4c) to 4c + 4.
+    /// One control step from the current tick (4c) to 4c + 4. Once the run has
+    /// finished or timed out, every further call says so again and changes nothing.
     pub fn step(&mut self) -> Result<StepStatus, RunError> {
         let tick = self.world.tick;
         if tick >= self.max_tick {
             return Ok(StepStatus::TimedOut);
+        }
+        if self.trackers.iter().all(AgentTracker::done) {
+            return Ok(StepStatus::Finished);
         }
         let t0 = Instant::now();
         plan::plan(&mut self.links.planners, tick, &self.world, &mut self.plans)?;
