@@ -130,17 +130,9 @@ fn main() -> Result<(), Box<dyn Error>> {
                         .unwrap()
                     })
                     .collect();
-                let k = runs as f64;
-                let mean = |f: &dyn Fn(&MetricsSummary) -> f64| ms.iter().map(f).sum::<f64>() / k;
                 println!(
-                    "{terrain} {engine:?} {speed:.2} m/s: falls/run {:.2} xy {:.3} (max {:.2}) z {:.3} residual {:.3} (peak {:.3}) dir {:.3}",
-                    mean(&|m| f64::from(m.falls)),
-                    mean(&|m| m.xy_err_mean),
-                    ms.iter().map(|m| m.xy_err_max).fold(0.0, f64::max),
-                    mean(&|m| m.z_err_mean),
-                    mean(&|m| m.residual_force_mean),
-                    ms.iter().map(|m| m.residual_force_peak).fold(0.0, f64::max),
-                    mean(&|m| m.mean_reward.dir),
+                    "{terrain} {engine:?} {speed:.2} m/s: {}",
+                    MetricsSummary::sweep_row(&ms)
                 );
             }
         }

@@ -161,6 +161,27 @@ pub struct MetricsSummary {
     pub residual_torque_peak: f64,
 }
 
+impl MetricsSummary {
+    /// One row of a sweep over several runs: mean falls per run, mean XY error (and the
+    /// worst), mean Z error, mean residual force (and the peak, fraction of m*g) and
+    /// the mean heading term of the path reward.
+    pub fn sweep_row(runs: &[Self]) -> String {
+        let k = runs.len().max(1) as f64;
+        let mean = |f: &dyn Fn(&Self) -> f64| runs.iter().map(f).sum::<f64>() / k;
+        let max = |f: &dyn Fn(&Self) -> f64| runs.iter().map(f).fold(0.0, f64::max);
+        format!(
+            "falls/run {:.2} xy {:.3} (max {:.2}) z {:.3} residual {:.3} (peak {:.3}) dir {:.3}",
+            mean(&|m| f64::from(m.falls)),
+            mean(&|m| m.xy_err_mean),
+            max(&|m| m.xy_err_max),
+            mean(&|m| m.z_err_mean),
+            mean(&|m| m.residual_force_mean),
+            max(&|m| m.residual_force_peak),
+            mean(&|m| m.mean_reward.dir),
+        )
+    }
+}
+
 /// Accumulates [`StepSample`]s of one run.
 #[derive(Debug, Clone)]
 pub struct MetricsAccumulator {
