@@ -21,7 +21,7 @@ use plamo::eval::{self, Experiment, RunOptions, Shard};
 use plamo::viz::{FAMILY, ensure_registered};
 use plamo_controller::{
     ControllerSettings, GaitParams, MetricsSummary, ModelBasedController, RampedPath, START_ACCEL,
-    StraightPath, flat_scene, run_path,
+    StraightPath, run_path, terrain_scene,
 };
 use plamo_physics::BackendKind;
 use plamo_scenes::Scene;
@@ -245,14 +245,6 @@ pub fn run(cmd: EvalCommand) -> anyhow::Result<ExitCode> {
     }
 }
 
-fn scene(terrain: &str) -> anyhow::Result<(Scene, [f64; 2])> {
-    if terrain == "flat" {
-        return Ok((flat_scene(60.0), [0.0, 0.0]));
-    }
-    let s = plamo_scenes::builtin(&format!("terrain-{terrain}"))?;
-    Ok((s, [5.0, 3.0]))
-}
-
 fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
     let backend: BackendKind = a
         .physics
@@ -268,7 +260,7 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
     };
     let scenes: Vec<(Scene, [f64; 2])> = TERRAINS
         .iter()
-        .map(|t| scene(t))
+        .map(|t| Ok(terrain_scene(t)?))
         .collect::<anyhow::Result<_>>()?;
     let jobs: Vec<(usize, usize, usize)> = (0..TERRAINS.len())
         .flat_map(|t| (0..FORMS.len()).flat_map(move |f| (0..a.runs).map(move |r| (t, f, r))))

@@ -30,7 +30,7 @@ use plamo_physics::humanoid::{BODIES, JOINTS, joint_index, shape_mass};
 use plamo_physics::{FEET, NUM_BODIES, NUM_JOINTS};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
-use super::residual_wrench;
+use super::{residual_force, residual_wrench};
 use crate::math::{clamp_norm, sub3, wrap_angle};
 use crate::observation::{Observation, WAYPOINT_SPACING};
 use crate::policy::{Action, RootWrench};
@@ -406,11 +406,15 @@ impl BipedGait {
         // Bounded residual root wrench, heading frame then world.
         let m = self.settings.body_mass;
         let g = &self.params.residual;
-        let force = [
-            m * g.vel_gain * (v_des[0] - vx),
-            m * g.vel_gain * (v_des[1] - vy),
-            (m * (g.height_gain * (pelvis_des - obs.root_height) - g.height_damping * vz)).max(0.0),
-        ];
+        let force = residual_force(
+            m,
+            g.vel_gain,
+            [v_des[0] - vx, v_des[1] - vy],
+            g.height_gain,
+            pelvis_des - obs.root_height,
+            g.height_damping,
+            vz,
+        );
         let torque = [
             -(g.rot_gain * roll + g.rot_damping * wx),
             -(g.rot_gain * (pitch - pitch_des) + g.rot_damping * wy),

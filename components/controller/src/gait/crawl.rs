@@ -36,7 +36,7 @@ use plamo_physics::humanoid::{BODIES, JOINTS, body_index, joint_index};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
 use super::params::{parse_toml, read_params};
-use super::residual_wrench;
+use super::{residual_force, residual_wrench};
 use crate::error::{ControllerError, Result};
 use crate::math::{sub3, wrap_angle};
 use crate::observation::{Observation, WAYPOINT_SPACING};
@@ -915,11 +915,15 @@ impl CrawlGait {
             heading_err.clamp(-TRANSITION_YAW_ERR, TRANSITION_YAW_ERR)
         };
         let m = self.settings.body_mass;
-        let force = [
-            m * p.vel_gain * (v_des[0] - vx),
-            m * p.vel_gain * (v_des[1] - vy),
-            (m * (p.height_gain * (height_des - obs.root_height) - p.height_damping * vz)).max(0.0),
-        ];
+        let force = residual_force(
+            m,
+            p.vel_gain,
+            [v_des[0] - vx, v_des[1] - vy],
+            p.height_gain,
+            height_des - obs.root_height,
+            p.height_damping,
+            vz,
+        );
         let torque = [
             -(p.rot_gain * roll + p.rot_damping * wx),
             -(p.rot_gain * (pitch - pitch_des) + p.rot_damping * wy),

@@ -37,6 +37,26 @@ fn plan_lead(obs: &Observation) -> f64 {
     w[0].hypot(w[1]) - WAYPOINT_SPACING * obs.waypoint_speeds[0].max(0.0)
 }
 
+/// The residual force a gait asks for, heading frame \[N\]: the horizontal velocity
+/// error times `vel_gain` \[1/s\], and a height PD (`height_gain` \[1/s^2\] on the
+/// root height error, `height_damping` \[1/s\] on the vertical velocity) that only
+/// pushes up, both times the body mass `m` \[kg\].
+fn residual_force(
+    m: f64,
+    vel_gain: f64,
+    v_err: [f64; 2],
+    height_gain: f64,
+    height_err: f64,
+    height_damping: f64,
+    vz: f64,
+) -> [f64; 3] {
+    [
+        m * vel_gain * v_err[0],
+        m * vel_gain * v_err[1],
+        (m * (height_gain * height_err - height_damping * vz)).max(0.0),
+    ]
+}
+
 /// The bounded residual root wrench of a gait's step: `force` \[N\] and `torque`
 /// \[N m\] in the heading frame, each clamped to its cap in `settings`, turned into
 /// the world frame. It goes into the action only when a cap is non-zero.
