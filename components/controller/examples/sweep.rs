@@ -1,16 +1,23 @@
 //! Walk sweep: mean falls, XY/Z error and residual over several start offsets per
-//! engine and speed (straight path, or an arc with `arc`).
+//! engine and speed (straight path, or an arc with `arc`), on flat ground or one of
+//! `plamo eval locomotion`'s terrain strips.
 //!
 //! `cargo run --release -p plamo-controller --features mujoco --example sweep --
-//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc]`
+//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc] [flat|slope|rough|stairs]`
+//!
+//! On a strip the runs start where `plamo eval locomotion` starts them (0.37 m apart
+//! along the strip, 0.1 m apart sideways) and stop before its 30 m end.
 use std::error::Error;
 
 use plamo_controller::{
     ArcPath, ControllerSettings, GaitParams, HeadPath, MetricsSummary, ModelBasedController,
-    RampedPath, START_ACCEL, StraightPath, flat_scene, run_path,
+    RampedPath, START_ACCEL, StraightPath, flat_scene, run_path, terrain_scene,
 };
 use plamo_physics::BackendKind;
 use rayon::prelude::*;
+
+/// Usable length of a terrain strip from its start \[m\] (as in `plamo eval locomotion`).
+const STRIP: f64 = 30.0;
 
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -26,7 +33,14 @@ fn main() -> Result<(), Box<dyn Error>> {
     let head: f64 = arg(2, "1.47").parse()?;
     let duration: f64 = arg(3, "10").parse()?;
     let runs: usize = arg(4, "4").parse()?;
-    let arc = arg(5, "straight") == "arc";
+    let arc = match arg(5, "straight").as_str() {
+        "straight" => false,
+        "arc" => true,
+        other => return Err(format!("path `{other}`: expected straight or arc").into()),
+    };
+    let terrain = arg(6, "flat");
+    // The strip (and where runs start on it) is eval locomotion's; checked once here.
+    let (strip, strip_start) = terrain_scene(&terrain)?;
     let mut settings = ControllerSettings {
         body_mass: plamo_physics::humanoid::total_mass(),
         ..Default::default()
@@ -46,8 +60,19 @@ fn main() -> Result<(), Box<dyn Error>> {
                 .map(|r| {
                     let mut policy =
                         ModelBasedController::with_params(params, settings.clone()).unwrap();
-                    let start = [0.37 * r as f64, 0.1 * (r % 3) as f64 - 0.1];
-                    let scene = flat_scene(speed * duration + 10.0);
+                    let start = [
+                        strip_start[0] + 0.37 * r as f64,
+                        strip_start[1] + 0.1 * (r % 3) as f64 - 0.1,
+                    ];
+                    let (scene, duration) = if terrain == "flat" {
+                        (flat_scene(speed * duration + 10.0), duration)
+                    } else {
+                        // A strip is 30 m long from its start.
+                        (
+                            strip.clone(),
+                            duration.min((STRIP - 0.37 * r as f64) / speed),
+                        )
+                    };
                     let path: Box<dyn HeadPath> = if arc {
                         Box::new(ArcPath {
                             start,
@@ -78,8 +103,12 @@ fn main() -> Result<(), Box<dyn Error>> {
                     .unwrap()
                 })
                 .collect();
+            // Per minute, as Table 2 reports falls (strip runs differ in length).
+            let per_min = ms.iter().map(|m| f64::from(m.falls)).sum::<f64>()
+                / ms.iter().map(|m| m.duration_s).sum::<f64>().max(1e-9)
+                * 60.0;
             println!(
-                "{engine:?} {speed:.2} m/s: {}",
+                "{engine:?} {terrain} head {head:.2} m {speed:.2} m/s: falls/min {per_min:.1} {}",
                 MetricsSummary::sweep_row(&ms)
             );
         }

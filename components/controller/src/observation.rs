@@ -172,6 +172,12 @@ pub struct Observation {
     /// Requested speeds at the waypoints \[m/s\] (not flattened: implied by spacing;
     /// kept for model-based policies).
     pub waypoint_speeds: [f64; NUM_WAYPOINTS],
+    /// Terrain height under each waypoint relative to the ground under the root \[m\]
+    /// (not flattened: the plan's points lie the requested head height above it; kept
+    /// so model-based policies see the ground beyond the height map, e.g. the treads
+    /// of stairs a step ahead). [`Observation::update`] samples the scene;
+    /// [`Observation::update_with_map`] has no scene and sets 0 (level ground).
+    pub waypoint_ground: [f64; NUM_WAYPOINTS],
     /// Local terrain heights relative to the ground under the root \[m\].
     pub height_map: LocalHeightMap,
     /// Head position relative to the root, heading frame \[m\] (not flattened: it is
@@ -196,6 +202,7 @@ impl Observation {
             body_pos: vec![[0.0; 3]; layout.num_bodies],
             waypoints: [[0.0; 3]; NUM_WAYPOINTS],
             waypoint_speeds: [0.0; NUM_WAYPOINTS],
+            waypoint_ground: [0.0; NUM_WAYPOINTS],
             height_map: [0.0; LOCAL_MAP_SAMPLES],
             head_pos: [0.0; 3],
             heading: 0.0,
@@ -219,7 +226,11 @@ impl Observation {
         let [x, y, _] = snapshot.root_pos;
         let ground = scene.height_at(x, y);
         let map = scene.local_height_map(x, y, heading, ground);
-        self.update_with_map(snapshot, waypoints, ground, &map)
+        self.update_with_map(snapshot, waypoints, ground, &map)?;
+        for (g, w) in self.waypoint_ground.iter_mut().zip(waypoints) {
+            *g = scene.height_at(w.x, w.y) - ground;
+        }
+        Ok(())
     }
 
     /// Rebuilds the observation from a snapshot, the plan, the terrain height under
@@ -262,6 +273,7 @@ impl Observation {
             self.waypoints[i] = to_heading_frame(heading, sub([w.x, w.y, w.z], head));
             self.waypoint_speeds[i] = w.v;
         }
+        self.waypoint_ground = [0.0; NUM_WAYPOINTS];
         self.height_map = *height_map;
         Ok(())
     }

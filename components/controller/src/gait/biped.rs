@@ -170,18 +170,138 @@ impl BipedGait {
     pub(crate) fn last_wrench(&self) -> RootWrench {
         self.last_wrench
     }
+}
 
-    /// Terrain height (relative to the ground under the root) at a heading-frame
-    /// point, from the nearest local height map sample.
-    fn ground_at(obs: &Observation, x: f64, y: f64) -> f64 {
-        let half = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
-        let r = (x / LOCAL_MAP_SPACING + half)
-            .round()
-            .clamp(0.0, (LOCAL_MAP_SIDE - 1) as f64);
-        let c = (y / LOCAL_MAP_SPACING + half)
-            .round()
-            .clamp(0.0, (LOCAL_MAP_SIDE - 1) as f64);
-        obs.height_map[r as usize * LOCAL_MAP_SIDE + c as usize]
+/// Sole of the foot along its length, from the ankle: heel and toe \[m\] (the
+/// humanoid's foot box).
+const SOLE: [f64; 2] = [-0.065, 0.155];
+
+/// Points along the sole where the ground is sampled, from the ankle \[m\].
+const SOLE_SAMPLES: [f64; 5] = [SOLE[0], 0.0, 0.05, 0.10, SOLE[1]];
+
+/// Spread of the ground under the sole above which the foot straddles an edge (a
+/// stair nose) and the foothold is moved \[m\].
+const EDGE_SPREAD: f64 = 0.05;
+
+/// Farthest the foothold is moved off an edge \[m\].
+const FOOTHOLD_SHIFT_MAX: f64 = 0.12;
+
+/// Extra swing clearance per metre the landing lies above the stance foot's ground
+/// \[-\]: a step up needs the toe higher over the nose it passes.
+const STEP_UP_LIFT: f64 = 0.5;
+
+/// Pelvis pitch per unit slope of the ground ahead (rise over run) \[rad\]: leaning
+/// into a climb keeps the centre of mass over the feet.
+const LEAN_PER_SLOPE: f64 = 0.3;
+
+/// How far ahead the slope that sets the lean is measured \[m\].
+const SLOPE_SPAN: f64 = 0.8;
+
+/// The ground the gait sees, heading frame, heights relative to the ground under the
+/// root: the local height map (bilinear) where it reaches, ahead of it the ground under
+/// the plan's waypoints, interpolated along the heading.
+struct Ground<'a> {
+    map: &'a [f64],
+    /// Forward distance and ground height of the waypoints ahead of the map, in
+    /// increasing distance \[m\].
+    ahead: [(f64, f64); crate::observation::NUM_WAYPOINTS],
+    n_ahead: usize,
+}
+
+/// Half the local map's extent \[m\].
+const MAP_HALF: f64 = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0 * LOCAL_MAP_SPACING;
+
+impl<'a> Ground<'a> {
+    fn new(obs: &'a Observation) -> Self {
+        let mut ahead = [(0.0, 0.0); crate::observation::NUM_WAYPOINTS];
+        let mut n_ahead = 0;
+        let mut last = MAP_HALF;
+        for (w, g) in obs.waypoints.iter().zip(obs.waypoint_ground) {
+            let x = w[0] + obs.head_pos[0];
+            if x > last + 0.05 {
+                ahead[n_ahead] = (x, g);
+                n_ahead += 1;
+                last = x;
+            }
+        }
+        Self {
+            map: &obs.height_map,
+            ahead,
+            n_ahead,
+        }
+    }
+
+    /// Bilinear height map value, clamped to the map's extent.
+    fn map_at(&self, x: f64, y: f64) -> f64 {
+        let last = (LOCAL_MAP_SIDE - 1) as f64;
+        let fr = ((x + MAP_HALF) / LOCAL_MAP_SPACING).clamp(0.0, last);
+        let fc = ((y + MAP_HALF) / LOCAL_MAP_SPACING).clamp(0.0, last);
+        let (r0, c0) = (
+            (fr.floor() as usize).min(LOCAL_MAP_SIDE - 2),
+            (fc.floor() as usize).min(LOCAL_MAP_SIDE - 2),
+        );
+        let (tr, tc) = (fr - r0 as f64, fc - c0 as f64);
+        let v = |r: usize, c: usize| self.map[r * LOCAL_MAP_SIDE + c];
+        let a = v(r0, c0) + (v(r0, c0 + 1) - v(r0, c0)) * tc;
+        let b = v(r0 + 1, c0) + (v(r0 + 1, c0 + 1) - v(r0 + 1, c0)) * tc;
+        a + (b - a) * tr
+    }
+
+    /// Ground height at a heading-frame point.
+    fn at(&self, x: f64, y: f64) -> f64 {
+        let edge = self.map_at(x, y);
+        if x <= MAP_HALF {
+            return edge;
+        }
+        let mut prev = (MAP_HALF, edge);
+        for &(xw, gw) in &self.ahead[..self.n_ahead] {
+            if x <= xw {
+                return prev.1 + (gw - prev.1) * (x - prev.0) / (xw - prev.0);
+            }
+            prev = (xw, gw);
+        }
+        prev.1
+    }
+
+    /// Highest ground under a sole whose ankle is at (x, y), and the spread of the
+    /// ground under it.
+    fn under_sole(&self, x: f64, y: f64) -> (f64, f64) {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for d in SOLE_SAMPLES {
+            let g = self.at(x + d, y);
+            lo = lo.min(g);
+            hi = hi.max(g);
+        }
+        (hi, hi - lo)
+    }
+
+    /// Foothold near the ankle point `x` (forward): where the sole straddles an edge,
+    /// the nearest point (within [`FOOTHOLD_SHIFT_MAX`]) where it lies on one level;
+    /// and the ground the sole rests on there.
+    fn foothold(&self, x: f64, y: f64) -> (f64, f64) {
+        let (g, spread) = self.under_sole(x, y);
+        if spread < EDGE_SPREAD {
+            return (x, g);
+        }
+        let steps = (FOOTHOLD_SHIFT_MAX / 0.01).round() as i32;
+        for k in 1..=steps {
+            for dx in [0.01 * k as f64, -0.01 * k as f64] {
+                let (g2, s2) = self.under_sole(x + dx, y);
+                if s2 < 0.4 * spread {
+                    return (x + dx, g2);
+                }
+            }
+        }
+        (x, g)
+    }
+
+    /// Highest ground a sole sweeps moving from ankle point `a` to `b` (forward).
+    fn swept(&self, a: f64, b: f64, y: f64) -> f64 {
+        let (lo, hi) = (a.min(b) + SOLE[0], a.max(b) + SOLE[1]);
+        let n = ((hi - lo) / 0.05).ceil().max(1.0) as usize;
+        (0..=n)
+            .map(|i| self.at(lo + (hi - lo) * i as f64 / n as f64, y))
+            .fold(f64::NEG_INFINITY, f64::max)
     }
 }
 
@@ -232,8 +352,11 @@ impl BipedGait {
         } else {
             0.0
         };
+        let ground = Ground::new(obs);
         let head_above_ground = obs.root_height + obs.head_pos[2];
-        let head_des = head_above_ground + wp0[2];
+        // The plan's point lies the requested height above the ground under it, not
+        // under the root: on stairs that is a tread or three away.
+        let head_des = head_above_ground + wp0[2] - obs.waypoint_ground[0];
         // The form follows the requested height at a bounded rate: dropping into a
         // crouch at once would let the body fall onto bent knees.
         if !self.started {
@@ -250,7 +373,9 @@ impl BipedGait {
                 STEP_TIME_RANGE[0] * form.step_time,
                 STEP_TIME_RANGE[1] * form.step_time,
             );
-        let pitch_des = form.trunk_pitch + form.lean_per_speed * speed;
+        let slope = (ground.at(SLOPE_SPAN, 0.0) - ground.at(0.0, 0.0)) / SLOPE_SPAN;
+        let pitch_des =
+            form.trunk_pitch + form.lean_per_speed * speed + LEAN_PER_SLOPE * slope.max(0.0);
         let pelvis_des = form.pelvis_height;
         // Integral speed control: a walker that lags (the engines differ in how far a
         // step carries) places its feet closer until the speed matches.
@@ -272,7 +397,7 @@ impl BipedGait {
             self.phase += CONTROL_DT;
             // Clearance relative to the stance foot's: the ankle's resting height
             // differs by engine (contact softness) and by how the foot lands.
-            let clearance = |f: [f64; 3]| obs.root_height + f[2] - Self::ground_at(obs, f[0], f[1]);
+            let clearance = |f: [f64; 3]| obs.root_height + f[2] - ground.under_sole(f[0], f[1]).0;
             let rest = clearance(feet[self.stance]).min(ANKLE_HEIGHT + 0.03);
             let touchdown =
                 self.phase > 0.5 * step_time && clearance(feet[swing]) < rest + TOUCHDOWN;
@@ -300,22 +425,29 @@ impl BipedGait {
             .zip(&obs.body_pos)
             .map(|(m, p)| m * p[0])
             .sum();
-        let final_xy = [
+        let final_y = side(swing) * form.foot_width
+            + form.foot_lat_gain * vy
+            + form.foot_err_gain * (vy - v_des[1]);
+        // Terrain-aware: off a stair nose, resting on the highest ground under the sole.
+        let (final_x, ground_land) = ground.foothold(
             com_x + form.foot_fwd_gain * vx + form.foot_err_gain * (vx - v_des[0]) - self.foot_bias,
-            side(swing) * form.foot_width
-                + form.foot_lat_gain * vy
-                + form.foot_err_gain * (vy - v_des[1]),
-        ];
+            final_y,
+        );
+        let final_xy = [final_x, final_y];
         let start = [
             feet[stance][0] + self.swing_start_rel_stance[0],
             feet[stance][1] + self.swing_start_rel_stance[1],
         ];
         let sx = start[0] + (final_xy[0] - start[0]) * s;
         let sy = start[1] + (final_xy[1] - start[1]) * s;
-        let ground_swing =
-            Self::ground_at(obs, sx, sy).max(Self::ground_at(obs, final_xy[0], final_xy[1]));
+        // The sole clears what it still has to pass over (a tread nose) and lands on
+        // the foothold's ground.
+        let ground_swing = ground.swept(sx, final_xy[0], sy).max(ground_land);
+        let st = feet[stance];
+        let ground_stance = ground.under_sole(st[0], st[1]).0;
+        let step_up = (ground_land - ground_stance).max(0.0);
         let lift = if s_lin < 1.0 {
-            form.swing_height * (std::f64::consts::PI * s_lin).sin()
+            (form.swing_height + STEP_UP_LIFT * step_up) * (std::f64::consts::PI * s_lin).sin()
         } else {
             -0.02
         };
@@ -326,8 +458,6 @@ impl BipedGait {
         ];
 
         // Stance foot target: where it is, with the pelvis at the desired height.
-        let st = feet[stance];
-        let ground_stance = Self::ground_at(obs, st[0], st[1]);
         // The stance hip pushes with the desired speed and, while the walker lags,
         // with the speed error (bounded: a target far behind the foot runs the stance leg
         // out of reach and the pelvis sinks).
@@ -411,7 +541,7 @@ impl BipedGait {
             g.vel_gain,
             [v_des[0] - vx, v_des[1] - vy],
             g.height_gain,
-            pelvis_des - obs.root_height,
+            pelvis_des - (obs.root_height - ground_stance),
             g.height_damping,
             vz,
         );
