@@ -6,19 +6,25 @@
 //! - the form's head height follows the plan at a bounded rate ([`MAX_HEIGHT_RATE`]);
 //! - the swing foot follows a path from its lift-off point to a SIMBICON foot
 //!   placement (ahead of the centre of mass by velocity, velocity error and an
-//!   integral of the speed error, sideways by the lateral velocity), lifted over the
-//!   local height map, by two-segment leg IK; the path is followed kd/kp ahead (the
-//!   lag of a PD servo behind a moving target) plus the form's `swing_lead` (the leg's
-//!   inertia adds to it); the swing is quicker at higher speed (`step_time_per_speed`);
+//!   integral of the speed error, sideways by the lateral velocity) by two-segment leg
+//!   IK; the path is followed kd/kp ahead (the lag of a PD servo behind a moving
+//!   target) plus the form's `swing_lead` (the leg's inertia adds to it); the swing is
+//!   quicker at higher speed (`step_time_per_speed`);
+//! - the gait is terrain-aware ([`Ground`]): the ground comes from the local height
+//!   map where it reaches and, ahead of it, from the ground under the plan's waypoints;
+//!   the sole lands on the highest ground under it; the swing clears the highest
+//!   ground it sweeps, higher the more relief it passes (a tread nose, gravel); the
+//!   pelvis leans with the slope ahead; the requested head height is the plan's head
+//!   point above the ground under it, not under the root;
 //! - legs switch at swing-foot touchdown (the swing foot as low as the stance foot,
 //!   after half a step; 1.5 steps at most); the leg targets' jump at the switch is
 //!   faded out over [`SWITCH_BLEND`];
-//! - the stance leg holds the pelvis height by IK, and its hip adds virtual-torso
-//!   torque from pelvis tilt error realised through the PD targets (offset = torque /
-//!   kp) minus the swing hip's torque (SIMBICON); the stance hip yaw turns the pelvis
-//!   towards the path; the stance foot's target sits behind the foot by the desired
-//!   speed and the speed error (`stance_push`, `push_err_gain`), so the stance hip
-//!   propels the body;
+//! - the stance leg holds the pelvis height above the ground under its sole by IK, and
+//!   its hip adds virtual-torso torque from pelvis tilt error realised through the PD
+//!   targets (offset = torque / kp) minus the swing hip's torque (SIMBICON); the stance
+//!   hip yaw turns the pelvis towards the path; the stance foot's target sits behind
+//!   the foot by the desired speed and the speed error (`stance_push`,
+//!   `push_err_gain`), so the stance hip propels the body;
 //! - a bounded residual root wrench (cap in [`ControllerSettings`]) helps with speed,
 //!   height and tilt; it is part of the action and reported by the metrics.
 
@@ -179,19 +185,19 @@ const SOLE: [f64; 2] = [-0.065, 0.155];
 /// Points along the sole where the ground is sampled, from the ankle \[m\].
 const SOLE_SAMPLES: [f64; 5] = [SOLE[0], 0.0, 0.05, 0.10, SOLE[1]];
 
-/// Spread of the ground under the sole above which the foot straddles an edge (a
-/// stair nose) and the foothold is moved \[m\].
-const EDGE_SPREAD: f64 = 0.05;
+/// Extra swing clearance per metre of terrain relief the sole passes over (the
+/// highest ground it sweeps above the lower of its take-off and landing ground) \[-\].
+/// Generous on purpose: a higher knee lift shortens the swinging leg, so it also comes
+/// through quicker, and a toe that clears a nose or a gravel bump by a few centimetres
+/// still trips when the foot pitches. On flat ground it adds nothing.
+const RELIEF_LIFT: f64 = 4.0;
 
-/// Farthest the foothold is moved off an edge \[m\].
-const FOOTHOLD_SHIFT_MAX: f64 = 0.12;
+/// Largest swing clearance the relief raises it to \[m\]: above it the swing foot
+/// would be pulled towards the pelvis.
+const SWING_HEIGHT_MAX: f64 = 0.35;
 
-/// Extra swing clearance per metre the landing lies above the stance foot's ground
-/// \[-\]: a step up needs the toe higher over the nose it passes.
-const STEP_UP_LIFT: f64 = 0.5;
-
-/// Pelvis pitch per unit slope of the ground ahead (rise over run) \[rad\]: leaning
-/// into a climb keeps the centre of mass over the feet.
+/// Pelvis pitch per unit slope of the ground ahead (rise over run, + up) \[rad\]:
+/// leaning into a climb and back on a descent keeps the centre of mass over the feet.
 const LEAN_PER_SLOPE: f64 = 0.3;
 
 /// How far ahead the slope that sets the lean is measured \[m\].
@@ -263,36 +269,19 @@ impl<'a> Ground<'a> {
         prev.1
     }
 
-    /// Highest ground under a sole whose ankle is at (x, y), and the spread of the
-    /// ground under it.
-    fn under_sole(&self, x: f64, y: f64) -> (f64, f64) {
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for d in SOLE_SAMPLES {
-            let g = self.at(x + d, y);
-            lo = lo.min(g);
-            hi = hi.max(g);
-        }
-        (hi, hi - lo)
+    /// Highest ground under a sole whose ankle is at (x, y): what the foot rests on.
+    fn under_sole(&self, x: f64, y: f64) -> f64 {
+        SOLE_SAMPLES
+            .iter()
+            .map(|d| self.at(x + d, y))
+            .fold(f64::NEG_INFINITY, f64::max)
     }
 
-    /// Foothold near the ankle point `x` (forward): where the sole straddles an edge,
-    /// the nearest point (within [`FOOTHOLD_SHIFT_MAX`]) where it lies on one level;
-    /// and the ground the sole rests on there.
-    fn foothold(&self, x: f64, y: f64) -> (f64, f64) {
-        let (g, spread) = self.under_sole(x, y);
-        if spread < EDGE_SPREAD {
-            return (x, g);
-        }
-        let steps = (FOOTHOLD_SHIFT_MAX / 0.01).round() as i32;
-        for k in 1..=steps {
-            for dx in [0.01 * k as f64, -0.01 * k as f64] {
-                let (g2, s2) = self.under_sole(x + dx, y);
-                if s2 < 0.4 * spread {
-                    return (x + dx, g2);
-                }
-            }
-        }
-        (x, g)
+    /// Mean ground under a sole whose ankle is at (x, y): the level a stance foot
+    /// stands at once it has settled (on a slope the highest point, its toe, would
+    /// lift the pelvis and cost residual force).
+    fn mean_under_sole(&self, x: f64, y: f64) -> f64 {
+        SOLE_SAMPLES.iter().map(|d| self.at(x + d, y)).sum::<f64>() / SOLE_SAMPLES.len() as f64
     }
 
     /// Highest ground a sole sweeps moving from ankle point `a` to `b` (forward).
@@ -374,8 +363,7 @@ impl BipedGait {
                 STEP_TIME_RANGE[1] * form.step_time,
             );
         let slope = (ground.at(SLOPE_SPAN, 0.0) - ground.at(0.0, 0.0)) / SLOPE_SPAN;
-        let pitch_des =
-            form.trunk_pitch + form.lean_per_speed * speed + LEAN_PER_SLOPE * slope.max(0.0);
+        let pitch_des = form.trunk_pitch + form.lean_per_speed * speed + LEAN_PER_SLOPE * slope;
         let pelvis_des = form.pelvis_height;
         // Integral speed control: a walker that lags (the engines differ in how far a
         // step carries) places its feet closer until the speed matches.
@@ -397,7 +385,7 @@ impl BipedGait {
             self.phase += CONTROL_DT;
             // Clearance relative to the stance foot's: the ankle's resting height
             // differs by engine (contact softness) and by how the foot lands.
-            let clearance = |f: [f64; 3]| obs.root_height + f[2] - ground.under_sole(f[0], f[1]).0;
+            let clearance = |f: [f64; 3]| obs.root_height + f[2] - ground.under_sole(f[0], f[1]);
             let rest = clearance(feet[self.stance]).min(ANKLE_HEIGHT + 0.03);
             let touchdown =
                 self.phase > 0.5 * step_time && clearance(feet[swing]) < rest + TOUCHDOWN;
@@ -428,26 +416,27 @@ impl BipedGait {
         let final_y = side(swing) * form.foot_width
             + form.foot_lat_gain * vy
             + form.foot_err_gain * (vy - v_des[1]);
-        // Terrain-aware: off a stair nose, resting on the highest ground under the sole.
-        let (final_x, ground_land) = ground.foothold(
+        let final_xy = [
             com_x + form.foot_fwd_gain * vx + form.foot_err_gain * (vx - v_des[0]) - self.foot_bias,
             final_y,
-        );
-        let final_xy = [final_x, final_y];
+        ];
         let start = [
             feet[stance][0] + self.swing_start_rel_stance[0],
             feet[stance][1] + self.swing_start_rel_stance[1],
         ];
         let sx = start[0] + (final_xy[0] - start[0]) * s;
         let sy = start[1] + (final_xy[1] - start[1]) * s;
-        // The sole clears what it still has to pass over (a tread nose) and lands on
-        // the foothold's ground.
+        // The sole lands on the highest ground under it (the height map's samples are
+        // 0.1 m apart, a sole 0.22 m long) and clears what it still has to pass over (a
+        // tread nose, a bump).
+        let ground_land = ground.under_sole(final_xy[0], final_xy[1]);
         let ground_swing = ground.swept(sx, final_xy[0], sy).max(ground_land);
         let st = feet[stance];
-        let ground_stance = ground.under_sole(st[0], st[1]).0;
-        let step_up = (ground_land - ground_stance).max(0.0);
+        let ground_stance = ground.mean_under_sole(st[0], st[1]);
+        let relief = ground_swing - ground_land.min(ground_stance);
         let lift = if s_lin < 1.0 {
-            (form.swing_height + STEP_UP_LIFT * step_up) * (std::f64::consts::PI * s_lin).sin()
+            (form.swing_height + RELIEF_LIFT * relief).min(SWING_HEIGHT_MAX.max(form.swing_height))
+                * (std::f64::consts::PI * s_lin).sin()
         } else {
             -0.02
         };
