@@ -55,7 +55,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     };
     for &engine in &engines {
         for &speed in &speeds {
-            let ms: Vec<MetricsSummary> = (0..runs)
+            let results: Vec<_> = (0..runs)
                 .into_par_iter()
                 .map(|r| {
                     let mut policy =
@@ -100,16 +100,28 @@ fn main() -> Result<(), Box<dyn Error>> {
                         &mut policy,
                         &settings,
                     )
-                    .unwrap()
                 })
                 .collect();
+            // A run whose physics diverged is reported and left out of the means.
+            let mut ms: Vec<MetricsSummary> = Vec::with_capacity(runs);
+            for (r, m) in results.into_iter().enumerate() {
+                match m {
+                    Ok(m) => ms.push(m),
+                    Err(e) => eprintln!("{engine:?} {terrain} {speed:.2} m/s run {r}: {e}"),
+                }
+            }
             // Per minute, as Table 2 reports falls (strip runs differ in length).
             let per_min = ms.iter().map(|m| f64::from(m.falls)).sum::<f64>()
                 / ms.iter().map(|m| m.duration_s).sum::<f64>().max(1e-9)
                 * 60.0;
             println!(
-                "{engine:?} {terrain} head {head:.2} m {speed:.2} m/s: falls/min {per_min:.1} {}",
-                MetricsSummary::sweep_row(&ms)
+                "{engine:?} {terrain} head {head:.2} m {speed:.2} m/s: falls/min {per_min:.1} {}{}",
+                MetricsSummary::sweep_row(&ms),
+                if ms.len() < runs {
+                    format!(" ({} of {runs} runs diverged)", runs - ms.len())
+                } else {
+                    String::new()
+                }
             );
         }
     }
