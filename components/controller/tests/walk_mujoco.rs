@@ -121,8 +121,9 @@ fn crouch_walk_at_1_and_2_m_per_s_does_not_fall_in_mujoco() {
 }
 
 /// Walks `plamo eval locomotion`'s stairs strip (flights of 0.12 m x 0.4 m steps up and
-/// down) from rest at 1 and 1.5 m/s, from two starts each, for 20 s: up to 30 m, over
-/// one to two and a half flights.
+/// down) from rest at 1 and 1.5 m/s, from four starts each, for 20 s: up to 30 m, over
+/// one to two and a half flights. The runs are the sweep example's
+/// (`sweep mujoco 1,1.5 1.47 20 4 straight stairs`).
 #[test]
 fn walk_climbs_and_descends_stairs_in_mujoco() {
     let settings = ControllerSettings {
@@ -130,14 +131,16 @@ fn walk_climbs_and_descends_stairs_in_mujoco() {
         ..Default::default()
     };
     let (scene, start) = terrain_scene("stairs").unwrap();
-    let mut falls = 0;
+    let mut runs = Vec::new();
     for speed in [1.0, 1.5] {
-        for r in 0..2 {
+        for r in 0..4 {
             let mut policy = ModelBasedController::new(settings.clone()).unwrap();
             let path = RampedPath {
                 line: StraightPath {
-                    // The sweep example's starts: `sweep mujoco 1,1.5 1.47 20 2 straight stairs`.
-                    start: [start[0] + 0.37 * r as f64, start[1] + 0.1 * r as f64 - 0.1],
+                    start: [
+                        start[0] + 0.37 * r as f64,
+                        start[1] + 0.1 * (r % 3) as f64 - 0.1,
+                    ],
                     speed,
                     head_height: 1.47,
                 },
@@ -157,13 +160,14 @@ fn walk_climbs_and_descends_stairs_in_mujoco() {
                 "{speed} m/s, start {r}: {}",
                 MetricsSummary::sweep_row(std::slice::from_ref(&m))
             );
-            falls += m.falls;
-            // Measured 0.05-0.16 m (0.18-0.35 m before the terrain-aware footholds).
-            assert!(m.xy_err_mean < 0.25, "xy error {}", m.xy_err_mean);
             assert!(m.residual_force_peak <= settings.residual_force_cap + 1e-9);
+            runs.push(m);
         }
     }
-    // Measured 1 fall in these four runs; the gait before the terrain-aware footholds
-    // fell 25 times.
-    assert!(falls <= 4, "{falls} falls on the stairs");
+    let falls: u32 = runs.iter().map(|m| m.falls).sum();
+    let xy = runs.iter().map(|m| m.xy_err_mean).sum::<f64>() / runs.len() as f64;
+    // Measured 4 falls and a mean XY error of 0.12 m; the gait before the terrain-aware
+    // footholds fell 49 times, 0.27 m.
+    assert!(falls <= 10, "{falls} falls on the stairs");
+    assert!(xy < 0.2, "mean xy error {xy} on the stairs");
 }

@@ -428,9 +428,11 @@ impl BipedGait {
         let sy = start[1] + (final_xy[1] - start[1]) * s;
         // The sole lands on the highest ground under it (the height map's samples are
         // 0.1 m apart, a sole 0.22 m long) and clears what it still has to pass over (a
-        // tread nose, a bump).
+        // tread nose, a bump) from where it is: the foot lags its path.
         let ground_land = ground.under_sole(final_xy[0], final_xy[1]);
-        let ground_swing = ground.swept(sx, final_xy[0], sy).max(ground_land);
+        let ground_swing = ground
+            .swept(sx.min(feet[swing][0]), final_xy[0], sy)
+            .max(ground_land);
         let st = feet[stance];
         let ground_stance = ground.mean_under_sole(st[0], st[1]);
         let relief = ground_swing - ground_land.min(ground_stance);
