@@ -3,7 +3,9 @@
 //! count, shards merge into the very same files as the whole sweep, every output
 //! file exists and parses, and bad arguments get clear errors.
 
-use std::path::{Path, PathBuf};
+mod support;
+
+use std::path::Path;
 use std::process::Command;
 
 use plamo::eval::dynamic::Dynamic;
@@ -13,10 +15,8 @@ use plamo::eval::slalom::{QpConfig, Slalom};
 use plamo::eval::{self, Experiment, RunOptions, Shard, Table};
 use plamo_physics::BackendKind;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("plamo-eval-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+fn tmp(name: &str) -> support::OutDir {
+    support::out_dir("eval", name)
 }
 
 fn opts(out: &Path, threads: usize, shard: Shard) -> RunOptions {
@@ -101,18 +101,15 @@ fn check_sweep<E: Experiment>(e: &E, expect: &[&str]) {
     eval::run(e, &opts(&s2, 1, "2/2".parse().unwrap())).unwrap();
     eval::run(e, &opts(&s1, 1, "1/2".parse().unwrap())).unwrap();
     // A missing shard is refused by name.
-    let err = eval::merge(std::slice::from_ref(&s1), &merged).unwrap_err();
+    let err = eval::merge(&[s1.to_path_buf()], &merged).unwrap_err();
     assert!(err.to_string().contains("shard 2/2 is missing"), "{err}");
-    eval::merge(&[s2.clone(), s1.clone()], &merged).unwrap();
+    eval::merge(&[s2.to_path_buf(), s1.to_path_buf()], &merged).unwrap();
     assert_eq!(
         a,
         files(&merged),
         "{}: merged shards differ from the whole sweep",
         E::NAME
     );
-    for d in [one, two, s1, s2, merged] {
-        let _ = std::fs::remove_dir_all(d);
-    }
 }
 
 #[test]
@@ -159,10 +156,8 @@ fn merge_refuses_shards_of_different_sweeps() {
     eval::run(&tiny_slalom(), &opts(&a, 1, "1/2".parse().unwrap())).unwrap();
     let other = Slalom::new(1, 7, vec![1.0], vec![]).unwrap();
     eval::run(&other, &opts(&b, 1, "2/2".parse().unwrap())).unwrap();
-    let err = eval::merge(&[a.clone(), b.clone()], &tmp("diff-m")).unwrap_err();
+    let err = eval::merge(&[a.to_path_buf(), b.to_path_buf()], &tmp("diff-m")).unwrap_err();
     assert!(err.to_string().contains("different sweep"), "{err}");
-    let _ = std::fs::remove_dir_all(a);
-    let _ = std::fs::remove_dir_all(b);
 }
 
 fn plamo(args: &[&str]) -> (bool, String) {

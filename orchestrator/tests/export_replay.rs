@@ -5,7 +5,9 @@
 //! re-exports, and clear errors. The Khronos validator, the BVH reader and the
 //! browser test run in scripts/test-all.sh (they need npm, PyPI and Chromium).
 
-use std::path::{Path, PathBuf};
+mod support;
+
+use std::path::Path;
 use std::process::{Command, Output};
 
 use serde_json::Value;
@@ -13,10 +15,8 @@ use serde_json::Value;
 const BIN: &str = env!("CARGO_BIN_EXE_plamo");
 const ROUTE: &str = "Run from the tree to the car, then crawl to the bench";
 
-fn out_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("plamo-export-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+fn out_dir(name: &str) -> support::OutDir {
+    support::out_dir("export", name)
 }
 
 /// A 3 s recording; the run itself times out (exit status 1) by design.
@@ -232,8 +232,6 @@ fn check_backend(physics: &str, tolerance: f64) {
         .parse()
         .unwrap();
     assert_eq!(frames, 3 * 30 + 1);
-    let _ = std::fs::remove_dir_all(&a);
-    let _ = std::fs::remove_dir_all(&b);
 }
 
 #[test]
@@ -310,7 +308,6 @@ fn view_writes_one_self_contained_page_or_says_how_to_build_the_bundle() {
         err.contains("npm ci") && err.contains("npm run build"),
         "{err}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -335,6 +332,4 @@ fn export_of_a_directory_that_is_no_recording_names_the_missing_file() {
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("trajectory.csv:4:"), "{err}");
-    let _ = std::fs::remove_dir_all(&dir);
-    let _ = std::fs::remove_dir_all(&rec);
 }

@@ -3,6 +3,8 @@
 //! orchestrator, two concurrent runs, and no shared-memory files left behind.
 //! Runs are a few simulated seconds long.
 
+mod support;
+
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -18,10 +20,8 @@ fn plamo(args: &[&str]) -> Command {
     c
 }
 
-fn out_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("plamo-run-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+fn out_dir(name: &str) -> support::OutDir {
+    support::out_dir("run-cli", name)
 }
 
 fn run_ok(args: &[&str], out: &Path) -> Output {

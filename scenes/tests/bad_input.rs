@@ -157,8 +157,8 @@ fn inline_grid_rows_must_agree() {
 
 #[test]
 fn png_height_maps_load_with_their_scale() {
-    let dir = std::env::temp_dir().join(format!("plamo-png-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let (nx, ny) = (11, 6);
     let values: Vec<u16> = (0..nx * ny).map(|k| (k % nx) as u16 * 100).collect();
     plamo_scenes::write_height_png(&dir.join("h.png"), nx, ny, &values).unwrap();
@@ -177,7 +177,6 @@ fn png_height_maps_load_with_their_scale() {
         m.contains("terrain.grid.path") && m.contains("nope.png"),
         "{m}"
     );
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]

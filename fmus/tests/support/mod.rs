@@ -5,7 +5,6 @@
 #![allow(dead_code)]
 
 use std::collections::HashMap;
-use std::path::PathBuf;
 
 use fmu_runner::{Fmu, FmuInstance, FmuLibrary, fmi2Type};
 use plamo::fmu_package::{find_library, package_all};
@@ -39,11 +38,14 @@ pub fn externals(t: f64) -> [ObstacleSample; 4] {
 
 /// Package the built FMU library into a fresh folder named after `tag`, then unpack
 /// and load the FMU of `model` (`plamo`, `plamo-planner`) as a co-simulation FMU.
-/// Returns it and the folder.
-pub fn load_fmu(model: &str, tag: &str) -> (FmuLibrary, PathBuf) {
+/// Returns it and the folder, which is deleted when the caller drops it.
+pub fn load_fmu(model: &str, tag: &str) -> (FmuLibrary, tempfile::TempDir) {
     let library = find_library().expect("cargo builds libplamo_fmu.so first");
-    let dir = std::env::temp_dir().join(format!("plamo-{tag}-{}", std::process::id()));
-    let packaged = package_all(&library, &dir, &[]).expect("package");
+    let dir = tempfile::Builder::new()
+        .prefix(&format!("plamo-{tag}-"))
+        .tempdir()
+        .expect("a temporary folder");
+    let packaged = package_all(&library, dir.path(), &[]).expect("package");
     let path = &packaged
         .iter()
         .find(|p| p.model_name == model)
