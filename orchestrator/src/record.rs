@@ -61,11 +61,14 @@ impl Recorder {
         })
     }
 
-    /// Record the world at its tick.
-    pub fn world(&mut self, w: &PhysicsOutput) -> std::io::Result<()> {
+    /// Record the world at its tick; `fallen[k]`: the orchestrator's fall rule found
+    /// agent k fallen in it (the rule the run's fall counts use, not the physics
+    /// component's own flag).
+    pub fn world(&mut self, w: &PhysicsOutput, fallen: &[bool]) -> std::io::Result<()> {
         for k in 0..w.agent_count as usize {
             let s = &w.agents[k];
-            write!(self.trajectory, "{},{},{}", w.tick, k, s.fallen)?;
+            let f = fallen.get(k).copied().unwrap_or(false) as u8;
+            write!(self.trajectory, "{},{},{f}", w.tick, k)?;
             for v in s
                 .root_position
                 .iter()

@@ -546,3 +546,65 @@ fn a_component_started_for_another_run_is_refused() {
     wait_with_deadline(&mut comp, Duration::from_secs(30)).expect("component hangs");
     assert_eq!(leftovers(run), Vec::<PathBuf>::new());
 }
+
+/// The number of times the trajectory's `fallen` column goes from 0 to 1.
+fn recorded_falls(out: &Path) -> usize {
+    let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    let mut lines = csv.lines();
+    let col = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .position(|c| c == "fallen")
+        .expect("a fallen column");
+    let flags: Vec<bool> = lines
+        .map(|l| l.split(',').nth(col).unwrap() == "1")
+        .collect();
+    let mut prev = false;
+    flags
+        .into_iter()
+        .filter(|&f| {
+            let rose = f && !prev;
+            prev = f;
+            rose
+        })
+        .count()
+}
+
+/// The falls the run's summary counts (metrics.json).
+fn summary_falls(out: &Path) -> usize {
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
+    m["agents"][0]["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["metrics"]["falls"].as_u64().unwrap() as usize)
+        .sum()
+}
+
+#[test]
+fn the_trajectory_records_the_falls_the_summary_counts() {
+    // Running on the stairs and gravel strips falls now and then: the column must
+    // rise exactly as often as the summary counts falls (it used to be the physics
+    // component's own, laxer flag, which missed most of them).
+    let mut total = 0;
+    for scene in ["terrain-stairs", "terrain-rough"] {
+        let out = out_dir(scene);
+        let o = Command::new(BIN)
+            .args(["run", "--scene", scene, "--quiet", "--max-seconds", "12"])
+            .args(["--instructions", "run from the start to the goal", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            String::from_utf8_lossy(&o.stdout).contains("trajectory digest"),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let (recorded, counted) = (recorded_falls(&out), summary_falls(&out));
+        assert_eq!(recorded, counted, "{scene}");
+        total += counted;
+    }
+    eprintln!("{total} falls recorded and counted");
+}

@@ -395,22 +395,26 @@ fn drive(
             return Err(Box::new(($e, Some(ls.into_links()))));
         }};
     }
-    if let Some(r) = recorder.as_deref_mut()
-        && let Err(e) = r.world(ls.world())
-    {
-        bail!(io(e));
-    }
+    // A world is written once the next control step has judged it by the fall rule,
+    // so the trajectory's `fallen` column is the one the fall counts use.
+    let mut unwritten = *ls.world();
     let status = loop {
-        match ls.step() {
+        let step = ls.step();
+        if let Some(r) = recorder.as_deref_mut() {
+            let done = !matches!(step, Ok(StepStatus::Running));
+            let verdicts = ls.fall_verdicts(unwritten.tick);
+            if let Err(e) = r.world(&unwritten, &verdicts) {
+                bail!(io(e));
+            }
+            if !done {
+                r.plans(ls.plans());
+                unwritten = *ls.world();
+            }
+        }
+        match step {
             Ok(StepStatus::Running) => {}
             Ok(s) => break s,
             Err(e) => bail!(e),
-        }
-        if let Some(r) = recorder.as_deref_mut() {
-            r.plans(ls.plans());
-            if let Err(e) = r.world(ls.world()) {
-                bail!(io(e));
-            }
         }
         if args.realtime && pace(start, ls.tick(), 1.0) {
             late += 1;

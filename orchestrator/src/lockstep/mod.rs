@@ -76,6 +76,9 @@ pub struct Lockstep {
     plans: Vec<PlanMessage>,
     input: PhysicsInput,
     fallen: Vec<bool>,
+    /// The fall rule's verdicts at `judged_tick` (before the low-top reset exception).
+    fell: Vec<bool>,
+    judged_tick: Option<u64>,
     trackers: Vec<AgentTracker>,
     digest: Digest,
     max_tick: u64,
@@ -124,6 +127,8 @@ impl Lockstep {
             plans: vec![PlanMessage::default(); agents],
             input: PhysicsInput::default(),
             fallen: vec![false; agents],
+            fell: vec![false; agents],
+            judged_tick: None,
             trackers: instruction_counts
                 .iter()
                 .map(|&n| AgentTracker::new(n, controller.clone()))
@@ -155,8 +160,10 @@ impl Lockstep {
                 &self.plans[k],
                 &self.input.actions[k],
             );
+            self.fell[k] = fell;
             self.fallen[k] = fell && AgentTracker::may_reset(&self.scene, &self.world.agents[k]);
         }
+        self.judged_tick = Some(tick);
         if self.trackers.iter().all(AgentTracker::done) {
             return Ok(StepStatus::Finished);
         }
@@ -219,6 +226,21 @@ impl Lockstep {
     /// Which agents were found fallen at the last control step (and reset).
     pub fn fallen(&self) -> &[bool] {
         &self.fallen
+    }
+    /// Which agents the fall rule found fallen in the world of `tick`, the rule the
+    /// run's fall counts use: the verdicts of the last control step when it judged
+    /// that tick, else the rule applied now with the last plans (a world no step
+    /// judged: the last one of a run that timed out or finished).
+    pub fn fall_verdicts(&self, tick: u64) -> Vec<bool> {
+        if self.judged_tick == Some(tick) {
+            return self.fell.clone();
+        }
+        self.trackers
+            .iter()
+            .zip(&self.plans)
+            .zip(&self.world.agents)
+            .map(|((t, plan), s)| t.is_fallen(&self.scene, s, plan))
+            .collect()
     }
     /// The current tick.
     pub fn tick(&self) -> Tick {
