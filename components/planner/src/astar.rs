@@ -11,6 +11,21 @@ pub struct SearchLimits {
     pub blocked_discs: Vec<[f64; 3]>,
     /// Inclusive cell window.
     pub window: Option<(usize, usize, usize, usize)>,
+    /// Where the crawling body's footprint must fit the step's heading
+    /// ([`PlanGrid::body_fits`]).
+    pub crawl_body: CrawlBody,
+}
+
+/// Where a search keeps the crawling body's footprint clear of walls.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum CrawlBody {
+    /// Nowhere (the fallback when the footprint leaves no path).
+    Off,
+    /// In the grid's crawl zone (under and around low tops).
+    #[default]
+    Zone,
+    /// Everywhere: the whole leg is crawled.
+    Everywhere,
 }
 
 impl SearchLimits {
@@ -29,6 +44,27 @@ impl SearchLimits {
             .iter()
             .all(|d| (x - d[0]).powi(2) + (y - d[1]).powi(2) > d[2] * d[2])
     }
+}
+
+/// Whether a step from `a` to `b` in direction `DIRS[d]` keeps the crawling body
+/// clear of walls at both ends (at `b` only when `a` is the start, where the body
+/// already is however it lies), when the rule applies there.
+#[inline]
+pub(crate) fn body_step_ok(
+    g: &PlanGrid,
+    rule: CrawlBody,
+    a: usize,
+    b: usize,
+    d: usize,
+    a_is_start: bool,
+) -> bool {
+    let applies = match rule {
+        CrawlBody::Off => return true,
+        CrawlBody::Zone => g.crawl_zone[a] || g.crawl_zone[b],
+        CrawlBody::Everywhere => true,
+    };
+    let bit = 1u8 << d;
+    !applies || (g.body_fits[b] & bit != 0 && (a_is_start || g.body_fits[a] & bit != 0))
 }
 
 /// A found path: cells from start to goal and its cost.
@@ -245,6 +281,9 @@ impl AStar {
                     continue;
                 }
                 if g.has_tops && g.edge_for(c, d, min_head).is_none() {
+                    continue;
+                }
+                if g.has_body_limits && !body_step_ok(g, limits.crawl_body, c, b, d, c == start) {
                     continue;
                 }
                 if nb.stamp == open || nb.stamp == closed {
@@ -630,9 +669,15 @@ mod tests {
                         rng.random_range(2 * nx / 3..nx),
                         rng.random_range(2 * ny / 3..ny),
                     )),
+                    crawl_body: CrawlBody::Off,
                 }
             } else {
-                SearchLimits::default()
+                // Dijkstra knows nothing of the crawling body's footprint, a rule
+                // on top of the grid (tested in tests/crawl_gap.rs).
+                SearchLimits {
+                    crawl_body: CrawlBody::Off,
+                    ..SearchLimits::default()
+                }
             };
             let dist = dijkstra_to(&g, &goals, min_head, &limits);
             for _ in 0..25 {

@@ -37,6 +37,16 @@ pub struct PlanGrid {
     pub free: Vec<bool>,
     /// Whether any cell has a ceiling (lets searches skip headroom checks).
     pub has_tops: bool,
+    /// Per cell, bit `d` set when the crawling body (head here, heading `DIRS[d]`,
+    /// `crawl_body_length` behind the head, `crawl_half_width` each side) clears
+    /// every wall; all bits set far from walls.
+    pub body_fits: Vec<u8>,
+    /// Cells where the character crawls whatever its leg's form: under a top that
+    /// puts the head below `crawl_switch_height`, or within `crawl_body_length` of
+    /// one.
+    pub crawl_zone: Vec<bool>,
+    /// Whether any cell's `body_fits` is not all set (lets searches skip the check).
+    pub has_body_limits: bool,
     /// Edge cost per cell and direction `DIRS[d]`, `INFINITY` when the edge is off
     /// the grid or removed (wall, corner cut, infeasible slope) \[m\].
     pub edges: Vec<[f32; 8]>,
@@ -67,6 +77,41 @@ fn edge_cost_with(s: &PlannerSettings, tan_max_slope: f64, dxy: f64, dh: f64) ->
         dxy * ((s.slope_preference_c * slope).exp() - 1.0)
     };
     Some(len + s.height_cost * adh + pref)
+}
+
+/// Whether a crawling body with its head at (x, y) and heading `heading` \[rad\]
+/// clears every wall of `scene` by `crawl_half_width`, and so does the line it is
+/// about to crawl along: samples every 0.1 m from `crawl_body_length` ahead of the
+/// head to `crawl_body_length` behind it. The line ahead makes a path enter a narrow
+/// gap on a straight lead-in a body long, so a crawler that tracks its path to a
+/// few decimetres is lined up with the gap before its head reaches it.
+pub(crate) fn crawl_body_clear(
+    scene: &Scene,
+    s: &PlannerSettings,
+    x: f64,
+    y: f64,
+    heading: f64,
+) -> bool {
+    let (sin, cos) = heading.sin_cos();
+    let w = s.crawl_half_width;
+    let n = ((2.0 * s.crawl_body_length) / 0.1).ceil().max(1.0) as usize;
+    let t = &scene.terrain;
+    let lo = [t.origin[0] + w, t.origin[1] + w];
+    let hi = [
+        t.origin[0] + (t.nx - 1) as f64 * t.resolution - w,
+        t.origin[1] + (t.ny - 1) as f64 * t.resolution - w,
+    ];
+    (0..=n).all(|k| {
+        let back = s.crawl_body_length * (2.0 * k as f64 / n as f64 - 1.0);
+        let (px, py) = (x - back * cos, y - back * sin);
+        // The terrain's edge is a drop: a body over it falls off the world.
+        (lo[0]..=hi[0]).contains(&px)
+            && (lo[1]..=hi[1]).contains(&py)
+            && scene
+                .walls
+                .iter()
+                .all(|wall| wall.footprint.signed_distance(px, py) >= w)
+    })
 }
 
 impl PlanGrid {
@@ -123,6 +168,70 @@ impl PlanGrid {
                 }
             }
         }
+        let mut body_fits = vec![u8::MAX; n];
+        let reach = s.crawl_body_length + 2.0 * s.crawl_half_width;
+        let body_bits = |x: f64, y: f64| {
+            let mut bits = 0u8;
+            for (d, &(di, dj)) in DIRS.iter().enumerate() {
+                if crawl_body_clear(scene, s, x, y, (dj as f64).atan2(di as f64)) {
+                    bits |= 1 << d;
+                }
+            }
+            bits
+        };
+        // Near the terrain's edge and near walls.
+        let edge = (reach / res).ceil() as usize;
+        for j in 0..ny {
+            for i in 0..nx {
+                let c = j * nx + i;
+                if free[c] && (i < edge || j < edge || i + edge >= nx || j + edge >= ny) {
+                    let [x, y] = pos(i, j);
+                    body_fits[c] = body_bits(x, y);
+                }
+            }
+        }
+        for w in &scene.walls {
+            let (lo, hi) = w.footprint.aabb();
+            let (i0, j0, i1, j1) = cover(
+                [lo[0] - reach, lo[1] - reach],
+                [hi[0] + reach, hi[1] + reach],
+            );
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let c = j * nx + i;
+                    if !free[c] || body_fits[c] != u8::MAX {
+                        continue;
+                    }
+                    let [x, y] = pos(i, j);
+                    body_fits[c] = body_bits(x, y);
+                }
+            }
+        }
+        let has_body_limits = body_fits.iter().any(|&b| b != u8::MAX);
+        // A head limited below the crawl switch means crawling, and the body trails
+        // the head by its length.
+        let crawl_head = (s.crawl_switch_height + s.head_margin) as f32;
+        let mut crawl_zone = vec![false; n];
+        let rr = (s.crawl_body_length / res).ceil() as isize;
+        for (c, &hr) in headroom.iter().enumerate() {
+            if hr >= crawl_head {
+                continue;
+            }
+            let (ci, cj) = ((c % nx) as isize, (c / nx) as isize);
+            for dj in -rr..=rr {
+                for di in -rr..=rr {
+                    let (i, j) = (ci + di, cj + dj);
+                    if i >= 0
+                        && j >= 0
+                        && (i as usize) < nx
+                        && (j as usize) < ny
+                        && di * di + dj * dj <= rr * rr
+                    {
+                        crawl_zone[j as usize * nx + i as usize] = true;
+                    }
+                }
+            }
+        }
         let mut edges = vec![[f32::INFINITY; 8]; n];
         let tan_max_slope = s.max_slope.tan();
         for (d, &(di, dj)) in DIRS[..4].iter().enumerate() {
@@ -165,6 +274,9 @@ impl PlanGrid {
             ny,
             height,
             has_tops,
+            body_fits,
+            crawl_zone,
+            has_body_limits,
             headroom,
             free,
             edges,

@@ -9,7 +9,7 @@ use plamo_scenes::{ObstacleState, Region, Scene};
 use serde::{Deserialize, Serialize};
 
 use crate::alt::AltLandmarks;
-use crate::astar::{AStar, SearchLimits};
+use crate::astar::{AStar, CrawlBody, GridPath, SearchLimits};
 use crate::connectivity::Components;
 use crate::dynamic::{Conflict, External, ExternalObstacle, Prediction, predict_conflict_with};
 use crate::grid::PlanGrid;
@@ -254,6 +254,40 @@ impl Planner {
         Ok(out)
     }
 
+    /// A* with the crawling body's footprint rule for `form` (everywhere on a crawl
+    /// leg, else where `limits` says), and without it when it leaves no path (a
+    /// start or target wedged against a wall): the footprint shapes a path, it never
+    /// makes a reachable target unreachable. Returns the path and the limits it was
+    /// found under (the refiner keeps to the same rule).
+    fn search_body(
+        &mut self,
+        start: usize,
+        goals: &[usize],
+        min_head: f32,
+        limits: &SearchLimits,
+        form: Locomotion,
+    ) -> Option<(GridPath, SearchLimits)> {
+        let mut limits = limits.clone();
+        if form == Locomotion::Crawl && limits.crawl_body == CrawlBody::Zone {
+            limits.crawl_body = CrawlBody::Everywhere;
+        }
+        loop {
+            let found = self.astar.search_with(
+                &self.grid,
+                start,
+                goals,
+                min_head,
+                &limits,
+                self.alt.as_ref(),
+            );
+            match found {
+                Some(p) => return Some((p, limits)),
+                None if limits.crawl_body != CrawlBody::Off => limits.crawl_body = CrawlBody::Off,
+                None => return None,
+            }
+        }
+    }
+
     fn min_head(&self, form: Locomotion) -> f32 {
         (self.settings.lowest_head_height(form) + self.settings.head_margin) as f32
     }
@@ -375,23 +409,15 @@ impl Planner {
         if !self.components_for(min_head).connected(start, &goals) {
             return Err(self.unreachable(index, UnreachableReason::Disconnected));
         }
-        let path = self
-            .astar
-            .search_with(
-                &self.grid,
-                start,
-                &goals,
-                min_head,
-                limits,
-                self.alt.as_ref(),
-            )
+        let (path, limits) = self
+            .search_body(start, &goals, min_head, limits, form)
             .ok_or_else(|| self.unreachable(index, UnreachableReason::Disconnected))?;
         let ctx = RefineCtx {
             scene: &self.scene,
             grid: &self.grid,
             settings: &self.settings,
             min_head,
-            limits,
+            limits: &limits,
         };
         let mut pts = refine(&ctx, form, &path, Some(from));
         set_speeds(&self.settings, &mut pts, v0, None)?;
@@ -484,6 +510,7 @@ impl Planner {
             let limits = SearchLimits {
                 blocked_discs: discs.clone(),
                 window: Some(window),
+                ..SearchLimits::default()
             };
             let start = match self.start_cell(from[0], from[1], min_head, &limits) {
                 Ok(c) => c,
@@ -529,14 +556,8 @@ impl Planner {
                         .map_err(|_| self.unreachable(index, UnreachableReason::TargetBlocked))?,
                 ]
             };
-            let Some(path) = self.astar.search_with(
-                &self.grid,
-                start,
-                &goals,
-                min_head,
-                &limits,
-                self.alt.as_ref(),
-            ) else {
+            let Some((path, limits)) = self.search_body(start, &goals, min_head, &limits, form)
+            else {
                 break;
             };
             let ctx = RefineCtx {

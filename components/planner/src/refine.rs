@@ -5,8 +5,8 @@
 use plamo_scenes::Scene;
 use serde::{Deserialize, Serialize};
 
-use crate::astar::{GridPath, SearchLimits};
-use crate::grid::{PlanGrid, edge_cost};
+use crate::astar::{CrawlBody, GridPath, SearchLimits};
+use crate::grid::{PlanGrid, crawl_body_clear, edge_cost};
 use crate::{Locomotion, PlannerSettings};
 
 /// One point of a refined, timed path.
@@ -66,10 +66,28 @@ impl RefineCtx<'_> {
                 .all(|d| (x - d[0]).powi(2) + (y - d[1]).powi(2) > d[2] * d[2])
     }
 
+    /// Whether a crawling body with its head at (x, y), heading `heading` \[rad\],
+    /// clears the walls where the footprint rule applies (see
+    /// [`PlannerSettings::crawl_body_length`]).
+    fn body_ok(&self, x: f64, y: f64, heading: f64) -> bool {
+        let g = self.grid;
+        if !g.has_body_limits {
+            return true;
+        }
+        let applies = match self.limits.crawl_body {
+            CrawlBody::Off => false,
+            CrawlBody::Zone => g.cell_of(x, y).is_some_and(|c| g.crawl_zone[c]),
+            CrawlBody::Everywhere => true,
+        };
+        !applies || crawl_body_clear(self.scene, self.settings, x, y, heading)
+    }
+
     /// Cost of the straight segment a-b with the A* edge cost, or `None` if it leaves
-    /// the free space or crosses an infeasible slope.
+    /// the free space, crosses an infeasible slope or turns the crawling body into a
+    /// wall.
     fn segment_cost(&self, a: [f64; 2], b: [f64; 2]) -> Option<f64> {
         let len = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        let heading = (b[1] - a[1]).atan2(b[0] - a[0]);
         let step = 0.5 * self.grid.resolution;
         let n = (len / step).ceil().max(1.0) as usize;
         let dxy = len / n as f64;
@@ -79,7 +97,7 @@ impl RefineCtx<'_> {
             let f = k as f64 / n as f64;
             let x = a[0] + (b[0] - a[0]) * f;
             let y = a[1] + (b[1] - a[1]) * f;
-            if !self.point_ok(x, y) {
+            if !self.point_ok(x, y) || !self.body_ok(x, y, heading) {
                 return None;
             }
             let h = self.scene.height_at(x, y);
@@ -166,7 +184,8 @@ pub(crate) fn smooth(ctx: &RefineCtx, pts: &mut [[f64; 2]], iterations: usize) {
                 0.5 * (pts[i - 1][1] + pts[i + 1][1]),
             ];
             let q = [p[0] + 0.5 * (m[0] - p[0]), p[1] + 0.5 * (m[1] - p[1])];
-            if ctx.point_ok(q[0], q[1]) {
+            let heading = (pts[i + 1][1] - pts[i - 1][1]).atan2(pts[i + 1][0] - pts[i - 1][0]);
+            if ctx.point_ok(q[0], q[1]) && ctx.body_ok(q[0], q[1], heading) {
                 pts[i] = q;
             }
         }
@@ -184,13 +203,23 @@ fn menger(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 }
 
 /// Head height allowed by ceilings near (x, y): the lowest top whose footprint is
-/// within the character radius, minus the margin \[m above terrain\].
+/// within the character radius, minus the margin \[m above terrain\]. A top low
+/// enough to crawl under (head below `crawl_switch_height`) counts from
+/// `crawl_body_length` away: the get-down (a squat, hands reaching ahead) must be
+/// over before the body reaches the top, or the head and shoulders hit its edge.
 pub(crate) fn head_limit(scene: &Scene, s: &PlannerSettings, x: f64, y: f64, ground: f64) -> f64 {
     scene
         .tops
         .iter()
-        .filter(|t| t.footprint.signed_distance(x, y) <= s.character_radius)
-        .map(|t| t.z_bottom - ground - s.head_margin)
+        .filter_map(|t| {
+            let lim = t.z_bottom - ground - s.head_margin;
+            let reach = if lim < s.crawl_switch_height {
+                s.crawl_body_length.max(s.character_radius)
+            } else {
+                s.character_radius
+            };
+            (t.footprint.signed_distance(x, y) <= reach).then_some(lim)
+        })
         .fold(f64::INFINITY, f64::min)
 }
 
@@ -258,8 +287,37 @@ pub(crate) fn annotate(
         out[i].head_height = out[i].head_height.min(lim);
     }
     for p in out.iter_mut() {
-        let v = s.speed_cap_at_height(form, p.head_height);
+        let mut v = s.speed_cap_at_height(form, p.head_height);
+        if p.head_height < s.crawl_switch_height {
+            v = v.min(s.crawl_speed);
+            if p.curvature > 0.0 {
+                v = v.min(s.crawl_turn_rate / p.curvature);
+            }
+        }
         p.v_cap = v / (1.0 + s.slope_speed_gain * p.slope.tan());
+    }
+    // Where the form changes, the body gets down or up nearly on the spot.
+    let mut change_from = Vec::new();
+    if out
+        .first()
+        .is_some_and(|p| p.head_height < s.crawl_switch_height)
+    {
+        change_from.push(0.0);
+    }
+    for i in 1..n {
+        let (a, b) = (out[i - 1].head_height, out[i].head_height);
+        let down = a >= s.crawl_switch_height && b < s.crawl_switch_height;
+        let up = a <= s.stand_switch_height && b > s.stand_switch_height;
+        if down || up {
+            change_from.push(out[i].s);
+        }
+    }
+    for s0 in change_from {
+        for p in out.iter_mut() {
+            if p.s >= s0 && p.s <= s0 + s.form_change_length {
+                p.v_cap = p.v_cap.min(s.form_change_speed);
+            }
+        }
     }
     out
 }

@@ -28,6 +28,44 @@ pub struct PlannerSettings {
     pub crawl_speed: f64,
     /// Top speed crouch-walking \[m/s\]. Default 2.0.
     pub crouch_speed: f64,
+    /// Length of the crawling body behind the head (head to feet: the shins trail
+    /// the knees), for the crawl's footprint (not in the paper) \[m\]. Where the
+    /// character crawls (a crawl leg, or within this distance of a top that puts the
+    /// head below `crawl_switch_height`), A* and the refiner
+    /// take a step only in a heading along which this body, `crawl_half_width` wide
+    /// on each side, clears every wall: a path through a narrow gap then crosses it
+    /// square-on, since at an angle the long body sweeps its hips into the gap's
+    /// ends. Default 1.3.
+    pub crawl_body_length: f64,
+    /// Half the width of the crawling body (shoulders, elbows, knees) \[m\]. Default
+    /// 0.25.
+    pub crawl_half_width: f64,
+    /// Requested head height below which the controller crawls (its `crawl_below`,
+    /// not in the paper) \[m\]. Under it the speed cap is at most `crawl_speed` (the
+    /// paper's v_max(z) would let a 0.5 m head go 1.25 m/s: a crawl's top speed is
+    /// ~1 m/s whatever its head height), and the get-down is planned: see
+    /// `form_change_speed`. Default 0.6.
+    pub crawl_switch_height: f64,
+    /// Requested head height above which a crawler stands up again (the controller's
+    /// `stand_above`) \[m\]. Default 1.1.
+    pub stand_switch_height: f64,
+    /// Speed cap while the character changes form (not in the paper) \[m/s\]: over
+    /// `form_change_length` of path from where the head crosses
+    /// `crawl_switch_height` going down, from where it crosses `stand_switch_height`
+    /// going up, and at the start of a path whose head starts below
+    /// `crawl_switch_height` (a crawl leg after a standing one). Getting down or up
+    /// takes the body 1.5-2 s nearly on the spot; a plan that runs on at full speed
+    /// leaves it metres behind (then re-planned from where it lies). Default 0.3.
+    pub form_change_speed: f64,
+    /// Path length over which `form_change_speed` holds \[m\]. Default 0.5.
+    pub form_change_length: f64,
+    /// Fastest turn of a crawl, heading change per second (not in the paper)
+    /// \[rad/s\]: with the head below `crawl_switch_height` the speed is capped at
+    /// this over the path's curvature. The lateral limit `a_lat` lets a 0.3 m radius
+    /// bend go 0.55 m/s, a turn of 1.8 rad/s that a body a metre long on hands and
+    /// knees does not make (it swings its hips wide, into the wall beside a gap).
+    /// Default 0.5.
+    pub crawl_turn_rate: f64,
     /// Top speed walking \[m/s\]. Default 2.0.
     pub walk_speed: f64,
     /// Top speed running \[m/s\]. Default 4.0.
@@ -111,6 +149,13 @@ impl Default for PlannerSettings {
             stand_height: 1.47,
             crawl_speed: 1.0,
             crouch_speed: 2.0,
+            crawl_body_length: 1.3,
+            crawl_half_width: 0.25,
+            crawl_switch_height: 0.6,
+            stand_switch_height: 1.1,
+            form_change_speed: 0.3,
+            form_change_length: 0.5,
+            crawl_turn_rate: 0.5,
             walk_speed: 2.0,
             run_speed: 4.0,
             sprint_speed: 5.0,
@@ -154,6 +199,13 @@ impl PlannerSettings {
             ("stand_height", self.stand_height),
             ("crawl_speed", self.crawl_speed),
             ("crouch_speed", self.crouch_speed),
+            ("crawl_body_length", self.crawl_body_length),
+            ("crawl_half_width", self.crawl_half_width),
+            ("crawl_switch_height", self.crawl_switch_height),
+            ("stand_switch_height", self.stand_switch_height),
+            ("form_change_speed", self.form_change_speed),
+            ("form_change_length", self.form_change_length),
+            ("crawl_turn_rate", self.crawl_turn_rate),
             ("walk_speed", self.walk_speed),
             ("run_speed", self.run_speed),
             ("sprint_speed", self.sprint_speed),
