@@ -2,13 +2,13 @@
 //! `plamo tune`, without the orchestrator); prints progress and writes the file.
 //!
 //! `cargo run --release -p plamo-controller --features mujoco --example tune --
-//! [walk|run|crouch] [generations] [seed] [mujoco|rapier|rapier,mujoco] [out.toml]
+//! [walk|run|crouch|crawl] [generations] [seed] [mujoco|rapier|rapier,mujoco] [out.toml]
 //! [start like form]`
 
 use std::error::Error;
 
 use plamo_controller::{
-    ControllerSettings, Form, GaitParams, TuneSettings, start_like, to_toml, tune,
+    ControllerSettings, CrawlParams, Form, GaitParams, TuneSettings, TunedParams, start_like, tune,
 };
 
 fn main() -> Result<(), Box<dyn Error>> {
@@ -37,13 +37,20 @@ fn main() -> Result<(), Box<dyn Error>> {
             .map(Into::into)
             .collect(),
     };
-    // PLAMO_GAIT_PARAMS=path.toml starts from a file instead of the built-in one.
-    let base = match std::env::var_os("PLAMO_GAIT_PARAMS") {
-        Some(p) => GaitParams::load(std::path::Path::new(&p))?,
-        None => GaitParams::default(),
+    // PLAMO_GAIT_PARAMS / PLAMO_CRAWL_PARAMS=path.toml start from a file instead of
+    // the built-in one.
+    let base = TunedParams {
+        gait: match std::env::var_os("PLAMO_GAIT_PARAMS") {
+            Some(p) => GaitParams::load(std::path::Path::new(&p))?,
+            None => GaitParams::default(),
+        },
+        crawl: match std::env::var_os("PLAMO_CRAWL_PARAMS") {
+            Some(p) => CrawlParams::load(std::path::Path::new(&p))?,
+            None => CrawlParams::default(),
+        },
     };
     let base = match args.get(5) {
-        Some(like) => start_like(&base, form, like.parse()?),
+        Some(like) => start_like(&base, form, like.parse()?)?,
         None => base,
     };
     let (best, cost) = tune(&base, &settings, |g| {
@@ -62,7 +69,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         arg(3, "mujoco"),
         args.get(5).map(|f| format!(" {f}")).unwrap_or_default()
     );
-    std::fs::write(&out, to_toml(&best, &header)?)?;
+    std::fs::write(&out, best.to_toml(form, &header)?)?;
     println!("{}", serde_json::to_string_pretty(&cost)?);
     Ok(())
 }

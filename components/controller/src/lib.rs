@@ -42,6 +42,6 @@ pub use rollout::{
 };
 pub use settings::{ControllerSettings, GRAVITY};
 pub use tune::{
-    Cost, Form, Generation, Rng, Sample, SepCmaEs, TuneSettings, evaluate, start_like,
+    Cost, Form, Generation, Rng, Sample, SepCmaEs, TuneSettings, TunedParams, evaluate, start_like,
     terrain_scene, to_toml, tune,
 };

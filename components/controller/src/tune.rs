@@ -1,5 +1,6 @@
 //! Offline "training" of the model-based gait: separable CMA-ES over one form's
-//! parameters, minimising tracking error + residual + falls over randomised
+//! parameters (the biped's walk, run or crouch-walk section of `gait.toml`, or the
+//! crawl's `crawl.toml`), minimising tracking error + residual + falls over randomised
 //! constant-speed straight paths. Deterministic per seed (rollouts are deterministic,
 //! candidates are drawn from a seeded generator, rayon results are collected in order).
 
@@ -12,7 +13,7 @@ use plamo_physics::BackendKind;
 pub use cmaes::{Rng, Sample, SepCmaEs};
 
 use crate::error::{ControllerError, Result};
-use crate::gait::{FormParams, GaitParams, ModelBasedController};
+use crate::gait::{CrawlParams, FormParams, GaitParams, ModelBasedController};
 use crate::rollout::{RampedPath, START_ACCEL, StraightPath, flat_scene, run_path};
 use crate::settings::ControllerSettings;
 
@@ -25,6 +26,9 @@ pub enum Form {
     Run,
     /// Crouch-walk (head 0.8 m).
     Crouch,
+    /// Crawl on hands and knees (head 0.4 m; `crawl.toml`). Its rollouts start
+    /// standing, so the get-down is part of every one.
+    Crawl,
 }
 
 impl std::str::FromStr for Form {
@@ -34,9 +38,10 @@ impl std::str::FromStr for Form {
             "walk" => Ok(Form::Walk),
             "run" => Ok(Form::Run),
             "crouch" => Ok(Form::Crouch),
+            "crawl" => Ok(Form::Crawl),
             _ => Err(ControllerError::InvalidSettings {
                 field: "form",
-                reason: format!("unknown form `{s}` (walk, run, crouch)"),
+                reason: format!("unknown form `{s}` (walk, run, crouch, crawl)"),
             }),
         }
     }
@@ -49,6 +54,9 @@ impl Form {
             Form::Walk => (1.47, [1.0, 2.0]),
             Form::Run => (1.47, [2.5, 4.0]),
             Form::Crouch => (0.8, [0.6, 2.0]),
+            // The paper's crawl is 1 m/s; slower crawls are what a plan asks for in
+            // tight spots.
+            Form::Crawl => (0.4, [0.4, 1.0]),
         }
     }
 
@@ -57,25 +65,69 @@ impl Form {
     fn z_weight(self) -> f64 {
         match self {
             Form::Crouch => 3.0,
-            Form::Walk | Form::Run => 1.0,
+            Form::Walk | Form::Run | Form::Crawl => 1.0,
         }
     }
 
     /// Cost of a fall \[m-equivalent\]: more than the XY error a reset onto the plan
     /// saves. The run's XY error is metres (the start from rest leaves it behind), so
     /// at 1 m a search trades falls for lag; a fall ends a run in a route.
+    /// The crawl's too: a crawler that falls must get up and down again, which costs
+    /// seconds.
     fn fall_cost(self) -> f64 {
         match self {
-            Form::Run => 3.0,
+            Form::Run | Form::Crawl => 3.0,
             Form::Walk | Form::Crouch => 1.0,
         }
     }
 
-    fn params(self, p: &mut GaitParams) -> &mut FormParams {
+    /// The biped's section of the form; `None` for the crawl, which has its own file.
+    fn params(self, p: &mut GaitParams) -> Option<&mut FormParams> {
         match self {
-            Form::Walk => &mut p.walk,
-            Form::Run => &mut p.run,
-            Form::Crouch => &mut p.crouch,
+            Form::Walk => Some(&mut p.walk),
+            Form::Run => Some(&mut p.run),
+            Form::Crouch => Some(&mut p.crouch),
+            Form::Crawl => None,
+        }
+    }
+}
+
+/// What a tuning run starts from and returns: the controller's two parameter files,
+/// the biped's and the crawl's (a form's search moves only its own fields).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TunedParams {
+    /// Walk, run and crouch-walk (`gait.toml`).
+    pub gait: GaitParams,
+    /// The crawl (`crawl.toml`).
+    pub crawl: CrawlParams,
+}
+
+impl Default for TunedParams {
+    /// The built-in files.
+    fn default() -> Self {
+        Self {
+            gait: GaitParams::default(),
+            crawl: CrawlParams::default(),
+        }
+    }
+}
+
+impl TunedParams {
+    fn validate(&self) -> Result<()> {
+        self.gait.validate()?;
+        self.crawl.validate()
+    }
+
+    /// The file `form`'s search changed, as TOML with a header naming the command
+    /// that made it: `crawl.toml` for the crawl, `gait.toml` otherwise.
+    pub fn to_toml(&self, form: Form, header: &str) -> Result<String> {
+        match form {
+            Form::Crawl => with_header(
+                &self.crawl,
+                header,
+                "Units: see the `CrawlParams` docs (m, s, rad, N m/rad).",
+            ),
+            _ => to_toml(&self.gait, header),
         }
     }
 }
@@ -134,23 +186,77 @@ const TUNED_CROUCH: [(&str, f64, f64); 18] = [
 /// them (the run's search would change the walk's residual under it).
 const RESIDUAL_FIELDS: usize = 3;
 
+/// Crawl search box: the gait, its feedback and its residual gains, the fields the
+/// hand-run evolution strategy behind the shipped `crawl.toml` searched (posture and
+/// transitions stay as set by hand: a search on straight paths cannot see the 0.6 m
+/// ceiling the posture is made for). Boxes keep `min_cycle` below `cycle`.
+const TUNED_CRAWL: [(&str, f64, f64); 19] = [
+    ("attitude_gain", 0.0, 1.5),
+    ("height_gain_limbs", 0.0, 1.5),
+    ("cycle", 0.66, 1.0),
+    ("min_cycle", 0.4, 0.66),
+    ("max_stride", 0.15, 0.45),
+    ("duty", 0.6, 0.9),
+    ("fast_duty", 0.5, 0.8),
+    ("slip_gain", 0.0, 1.0),
+    ("max_slip", 0.0, 0.6),
+    ("vel_filter", 0.05, 1.0),
+    ("place_gain", 0.0, 0.3),
+    ("knee_lift", 0.03, 0.15),
+    ("hand_lift", 0.03, 0.15),
+    ("yaw_gain", 0.5, 4.0),
+    ("max_accel", 0.5, 4.0),
+    ("vel_gain", 0.0, 4.0),
+    ("rot_gain", 0.0, 300.0),
+    ("rot_damping", 0.0, 60.0),
+    ("yaw_torque_gain", 0.0, 300.0),
+];
+
 /// The search box of a form.
 fn tuned(form: Form) -> &'static [(&'static str, f64, f64)] {
     match form {
         Form::Crouch => &TUNED_CROUCH,
         Form::Walk => &TUNED,
         Form::Run => &TUNED[..TUNED.len() - RESIDUAL_FIELDS],
+        Form::Crawl => &TUNED_CRAWL,
     }
 }
 
-fn field<'a>(p: &'a mut GaitParams, form: Form, name: &str) -> &'a mut f64 {
+fn crawl_field<'a>(c: &'a mut CrawlParams, name: &str) -> &'a mut f64 {
     match name {
-        "residual.vel_gain" => return &mut p.residual.vel_gain,
-        "residual.height_gain" => return &mut p.residual.height_gain,
-        "residual.height_damping" => return &mut p.residual.height_damping,
+        "attitude_gain" => &mut c.attitude_gain,
+        "height_gain_limbs" => &mut c.height_gain_limbs,
+        "cycle" => &mut c.cycle,
+        "min_cycle" => &mut c.min_cycle,
+        "max_stride" => &mut c.max_stride,
+        "duty" => &mut c.duty,
+        "fast_duty" => &mut c.fast_duty,
+        "slip_gain" => &mut c.slip_gain,
+        "max_slip" => &mut c.max_slip,
+        "vel_filter" => &mut c.vel_filter,
+        "place_gain" => &mut c.place_gain,
+        "knee_lift" => &mut c.knee_lift,
+        "hand_lift" => &mut c.hand_lift,
+        "yaw_gain" => &mut c.yaw_gain,
+        "max_accel" => &mut c.max_accel,
+        "vel_gain" => &mut c.vel_gain,
+        "rot_gain" => &mut c.rot_gain,
+        "rot_damping" => &mut c.rot_damping,
+        _ => &mut c.yaw_torque_gain,
+    }
+}
+
+fn field<'a>(p: &'a mut TunedParams, form: Form, name: &str) -> &'a mut f64 {
+    let g = &mut p.gait;
+    match name {
+        "residual.vel_gain" => return &mut g.residual.vel_gain,
+        "residual.height_gain" => return &mut g.residual.height_gain,
+        "residual.height_damping" => return &mut g.residual.height_damping,
         _ => {}
     }
-    let f = form.params(p);
+    let Some(f) = form.params(g) else {
+        return crawl_field(&mut p.crawl, name);
+    };
     match name {
         "step_time" => &mut f.step_time,
         "swing_height" => &mut f.swing_height,
@@ -247,7 +353,7 @@ pub fn terrain_scene(name: &str) -> Result<(plamo_scenes::Scene, [f64; 2])> {
 }
 
 /// Evaluates `params` on the scenarios drawn for `seed` (same seed, same scenarios).
-pub fn evaluate(params: &GaitParams, s: &TuneSettings, seed: u64) -> Result<Cost> {
+pub fn evaluate(params: &TunedParams, s: &TuneSettings, seed: u64) -> Result<Cost> {
     let (head, [lo, hi]) = s.form.task();
     let mut rng = Rng::new(seed);
     let jobs: Vec<(BackendKind, f64)> = s
@@ -275,7 +381,11 @@ pub fn evaluate(params: &GaitParams, s: &TuneSettings, seed: u64) -> Result<Cost
         .par_iter()
         .enumerate()
         .map(|(k, &(backend, speed))| {
-            let mut policy = ModelBasedController::with_params(*params, s.controller.clone())?;
+            let mut policy = ModelBasedController::with_all_params(
+                params.gait,
+                params.crawl,
+                s.controller.clone(),
+            )?;
             let (scene, start) = &grounds[(k % s.rollouts.max(1)) % grounds.len()];
             let path = RampedPath {
                 line: StraightPath {
@@ -328,7 +438,7 @@ pub fn evaluate(params: &GaitParams, s: &TuneSettings, seed: u64) -> Result<Cost
     })
 }
 
-fn decode(base: &GaitParams, form: Form, x: &[f64]) -> GaitParams {
+fn decode(base: &TunedParams, form: Form, x: &[f64]) -> TunedParams {
     let mut p = *base;
     for (&(name, lo, hi), v) in tuned(form).iter().zip(x) {
         *field(&mut p, form, name) = lo + (hi - lo) * v.clamp(0.0, 1.0);
@@ -336,7 +446,7 @@ fn decode(base: &GaitParams, form: Form, x: &[f64]) -> GaitParams {
     p
 }
 
-fn encode(base: &GaitParams, form: Form) -> Vec<f64> {
+fn encode(base: &TunedParams, form: Form) -> Vec<f64> {
     let mut p = *base;
     tuned(form)
         .iter()
@@ -346,8 +456,18 @@ fn encode(base: &GaitParams, form: Form) -> Vec<f64> {
 
 /// `base` with the searched parameters of `form` (residual gains aside) copied from
 /// the section of `like`: a search for the run can start from the tuned walk, whose
-/// gait at run speeds falls less than an untuned run section.
-pub fn start_like(base: &GaitParams, form: Form, like: Form) -> GaitParams {
+/// gait at run speeds falls less than an untuned run section. The biped's forms
+/// only: the crawl shares no fields with them.
+pub fn start_like(base: &TunedParams, form: Form, like: Form) -> Result<TunedParams> {
+    if form == Form::Crawl || like == Form::Crawl {
+        return Err(ControllerError::InvalidSettings {
+            field: "start_like",
+            reason: format!(
+                "{form:?} cannot start like {like:?}: the crawl has its own parameters \
+                 (start-like works between walk, run and crouch)"
+            ),
+        });
+    }
     let mut p = *base;
     for &(name, _, _) in tuned(form) {
         if name.starts_with("residual.") {
@@ -356,17 +476,17 @@ pub fn start_like(base: &GaitParams, form: Form, like: Form) -> GaitParams {
         let v = *field(&mut p, like, name);
         *field(&mut p, form, name) = v;
     }
-    p
+    Ok(p)
 }
 
 /// Runs CMA-ES from `base`; returns the best parameters found and their cost. The
 /// scenarios (stratified, jittered speeds over the form's range) are drawn once from
 /// the seed, so the objective is deterministic and the best is monotone.
 pub fn tune(
-    base: &GaitParams,
+    base: &TunedParams,
     s: &TuneSettings,
     mut on_generation: impl FnMut(&Generation),
-) -> Result<(GaitParams, Cost)> {
+) -> Result<(TunedParams, Cost)> {
     let mut rng = Rng::new(s.seed);
     let mut es = SepCmaEs::new(encode(base, s.form), s.sigma0, 0);
     let mut best = (*base, evaluate(base, s, s.seed)?);
@@ -375,7 +495,7 @@ pub fn tune(
         let scenario_seed = s.seed;
         let samples = es.ask(&mut rng);
         let mut costs = Vec::with_capacity(samples.len());
-        let mut gen_best: Option<(GaitParams, Cost)> = None;
+        let mut gen_best: Option<(TunedParams, Cost)> = None;
         for smp in &samples {
             let p = decode(base, s.form, &smp.x);
             // Out-of-box candidates are clamped and pay for the distance.
@@ -411,6 +531,15 @@ pub fn tune(
 
 /// The parameters as a TOML file with a header naming the command that made them.
 pub fn to_toml(params: &GaitParams, header: &str) -> Result<String> {
+    with_header(
+        params,
+        header,
+        "Units: see `FormParams`/`ResidualGains` docs (m, s, rad, N m/rad).",
+    )
+}
+
+/// `params` as TOML after `header` and `units` as comment lines.
+fn with_header<T: serde::Serialize>(params: &T, header: &str, units: &str) -> Result<String> {
     let body = toml::to_string(params).map_err(|e| ControllerError::InvalidSettings {
         field: "params",
         reason: e.to_string(),
@@ -421,7 +550,9 @@ pub fn to_toml(params: &GaitParams, header: &str) -> Result<String> {
         out.push_str(line);
         out.push('\n');
     }
-    out.push_str("# Units: see `FormParams`/`ResidualGains` docs (m, s, rad, N m/rad).\n");
+    out.push_str("# ");
+    out.push_str(units);
+    out.push('\n');
     out.push_str(&body);
     Ok(out)
 }

@@ -3,12 +3,14 @@
 //! different seed searches differently. (A tiny budget here; RESULTS.md has the full
 //! command that reproduces `params/gait.toml`.)
 
-use plamo_controller::{ControllerSettings, Form, GaitParams, TuneSettings, to_toml, tune};
+use plamo_controller::{
+    ControllerSettings, CrawlParams, Form, GaitParams, TuneSettings, TunedParams, start_like, tune,
+};
 use plamo_physics::BackendKind;
 
-fn settings(seed: u64, terrain: &str) -> TuneSettings {
+fn settings(form: Form, seed: u64, terrain: &str) -> TuneSettings {
     TuneSettings {
-        form: Form::Walk,
+        form,
         generations: 1,
         seed,
         backends: vec![BackendKind::Rapier],
@@ -24,29 +26,62 @@ fn settings(seed: u64, terrain: &str) -> TuneSettings {
     }
 }
 
-fn run(seed: u64) -> (String, f64) {
-    let settings = settings(seed, "rough");
+fn run(form: Form, seed: u64, terrain: &str) -> (String, f64) {
+    let settings = settings(form, seed, terrain);
     let mut generations = 0;
-    let (best, cost) = tune(&GaitParams::default(), &settings, |_| generations += 1).unwrap();
+    let (best, cost) = tune(&TunedParams::default(), &settings, |_| generations += 1).unwrap();
     assert_eq!(generations, 1);
-    (to_toml(&best, "test").unwrap(), cost.total)
+    (best.to_toml(form, "test").unwrap(), cost.total)
 }
 
 #[test]
 fn tuning_is_deterministic_per_seed() {
-    let a = run(3);
-    let b = run(3);
+    let a = run(Form::Walk, 3, "rough");
+    let b = run(Form::Walk, 3, "rough");
     assert_eq!(a.0, b.0);
     assert_eq!(a.1.to_bits(), b.1.to_bits());
     // The written file loads back.
     GaitParams::from_toml(&a.0, std::path::Path::new("tuned.toml")).unwrap();
-    let c = run(4);
+    let c = run(Form::Walk, 4, "rough");
     assert!(a.0 != c.0 || a.1 != c.1, "seed changes nothing");
 }
 
 #[test]
+fn crawl_tuning_is_deterministic_and_writes_a_crawl_file() {
+    let a = run(Form::Crawl, 3, "flat");
+    let b = run(Form::Crawl, 3, "flat");
+    assert_eq!(a.0, b.0);
+    assert_eq!(a.1.to_bits(), b.1.to_bits());
+    // A crawl parameter file, not a gait one, that loads back and differs from the
+    // start (one generation of 4+ candidates from sigma 0.15 moves something).
+    let tuned = CrawlParams::from_toml(&a.0, std::path::Path::new("crawl-tuned.toml")).unwrap();
+    assert!(GaitParams::from_toml(&a.0, std::path::Path::new("x.toml")).is_err());
+    let c = run(Form::Crawl, 4, "flat");
+    assert!(a.0 != c.0 || a.1 != c.1, "seed changes nothing");
+    // Posture is not searched.
+    let d = CrawlParams::default();
+    assert_eq!(
+        (tuned.pelvis_pitch, tuned.spine_pitch, tuned.down_time),
+        (d.pelvis_pitch, d.spine_pitch, d.down_time)
+    );
+}
+
+#[test]
+fn the_crawl_cannot_start_like_a_biped_form() {
+    let e = start_like(&TunedParams::default(), Form::Crawl, Form::Walk).unwrap_err();
+    assert!(e.to_string().contains("walk, run and crouch"), "{e}");
+    let e = "hop".parse::<Form>().unwrap_err();
+    assert!(e.to_string().contains("crawl"), "{e}");
+}
+
+#[test]
 fn an_unknown_terrain_is_an_error_that_lists_the_known_ones() {
-    let err = tune(&GaitParams::default(), &settings(1, "ruff"), |_| {}).unwrap_err();
+    let err = tune(
+        &TunedParams::default(),
+        &settings(Form::Walk, 1, "ruff"),
+        |_| {},
+    )
+    .unwrap_err();
     let msg = err.to_string();
     assert!(
         msg.contains("`ruff`") && msg.contains("rough") && msg.contains("stairs"),

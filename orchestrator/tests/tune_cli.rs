@@ -1,0 +1,54 @@
+//! `plamo tune` through the built binary: the crawl writes a crawl parameter file the
+//! controller loads, and bad combinations are refused by name.
+
+mod support;
+
+use std::process::{Command, Output};
+
+fn plamo(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_plamo"))
+        .arg("tune")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn tuning_the_crawl_writes_a_crawl_file_that_loads() {
+    let dir = support::out_dir("tune", "crawl");
+    let out = dir.join("crawl.toml");
+    let o = plamo(&[
+        "--form",
+        "crawl",
+        "--budget",
+        "1",
+        "--rollouts",
+        "1",
+        "--duration",
+        "1",
+        "--physics",
+        "rapier",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.starts_with("# Crawl parameters"), "{text}");
+    assert!(text.contains("plamo tune --form crawl --budget 1"), "{text}");
+    plamo_controller::CrawlParams::load(&out).unwrap();
+}
+
+#[test]
+fn bad_tuning_arguments_are_refused_by_name() {
+    let cases: [(&[&str], &str); 3] = [
+        (&["--form", "hop"], "walk, run, crouch, crawl"),
+        (&["--form", "crawl", "--start-like", "walk"], "start-like works"),
+        (&["--terrains", "ruff", "--budget", "1"], "`ruff`"),
+    ];
+    for (args, needle) in cases {
+        let o = plamo(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(err.contains(needle), "{args:?}: `{needle}` not in {err}");
+    }
+}
