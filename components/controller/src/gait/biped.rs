@@ -186,7 +186,8 @@ const SOLE: [f64; 2] = [-0.065, 0.155];
 const SOLE_SAMPLES: [f64; 5] = [SOLE[0], 0.0, 0.05, 0.10, SOLE[1]];
 
 /// Extra swing clearance per metre of terrain relief the sole passes over (the
-/// highest ground it sweeps above the lower of its take-off and landing ground) \[-\].
+/// highest ground it sweeps above the plane of the local slope through the lower of
+/// its take-off and landing ground) \[-\].
 /// Generous on purpose: a higher knee lift shortens the swinging leg, so it also comes
 /// through quicker, and a toe that clears a nose or a gravel bump by a few centimetres
 /// still trips when the foot pitches. On flat ground it adds nothing.
@@ -282,6 +283,35 @@ impl<'a> Ground<'a> {
     /// lift the pelvis and cost residual force).
     fn mean_under_sole(&self, x: f64, y: f64) -> f64 {
         SOLE_SAMPLES.iter().map(|d| self.at(x + d, y)).sum::<f64>() / SOLE_SAMPLES.len() as f64
+    }
+
+    /// Least-squares slope (rise over run, forward) of the height map's row means: the
+    /// ramp under the feet, with gravel and tread noses averaged out.
+    fn map_slope(&self) -> f64 {
+        let n = LOCAL_MAP_SIDE as f64;
+        let half = (n - 1.0) / 2.0;
+        let (mut sxy, mut sxx) = (0.0, 0.0);
+        for r in 0..LOCAL_MAP_SIDE {
+            let x = (r as f64 - half) * LOCAL_MAP_SPACING;
+            let row = &self.map[r * LOCAL_MAP_SIDE..(r + 1) * LOCAL_MAP_SIDE];
+            sxy += x * row.iter().sum::<f64>() / n;
+            sxx += x * x;
+        }
+        sxy / sxx
+    }
+
+    /// Highest ground a sole sweeps from ankle point `a` to `b` above the plane of
+    /// `slope` through the lower of their grounds `ga`, `gb` (0 if none is above).
+    fn relief(&self, a: f64, ga: f64, b: f64, gb: f64, y: f64, slope: f64) -> f64 {
+        let (xr, gr) = if ga <= gb { (a, ga) } else { (b, gb) };
+        let (lo, hi) = (a.min(b) + SOLE[0], a.max(b) + SOLE[1]);
+        let n = ((hi - lo) / 0.05).ceil().max(1.0) as usize;
+        (0..=n)
+            .map(|i| {
+                let x = lo + (hi - lo) * i as f64 / n as f64;
+                self.at(x, y) - gr - slope * (x - xr)
+            })
+            .fold(0.0, f64::max)
     }
 
     /// Highest ground a sole sweeps moving from ankle point `a` to `b` (forward).
@@ -430,12 +460,20 @@ impl BipedGait {
         // 0.1 m apart, a sole 0.22 m long) and clears what it still has to pass over (a
         // tread nose, a bump) from where it is: the foot lags its path.
         let ground_land = ground.under_sole(final_xy[0], final_xy[1]);
-        let ground_swing = ground
-            .swept(sx.min(feet[swing][0]), final_xy[0], sy)
-            .max(ground_land);
+        let foot_x = sx.min(feet[swing][0]);
+        let ground_swing = ground.swept(foot_x, final_xy[0], sy).max(ground_land);
         let st = feet[stance];
         let ground_stance = ground.mean_under_sole(st[0], st[1]);
-        let relief = ground_swing - ground_land.min(ground_stance);
+        // Relief above the plane of the local slope: a ramp needs no extra lift, a tread
+        // nose or a bump does.
+        let relief = ground.relief(
+            foot_x,
+            ground.under_sole(foot_x, sy).min(ground_stance),
+            final_xy[0],
+            ground_land,
+            sy,
+            ground.map_slope(),
+        );
         let lift = if s_lin < 1.0 {
             (form.swing_height + RELIEF_LIFT * relief).min(SWING_HEIGHT_MAX.max(form.swing_height))
                 * (std::f64::consts::PI * s_lin).sin()
