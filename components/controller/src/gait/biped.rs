@@ -601,4 +601,66 @@ mod tests {
         let c = BipedGait::new(GaitParams::default(), ControllerSettings::default());
         assert!((c.legs.thigh - 0.41).abs() < 0.05 && (c.legs.shin - 0.39).abs() < 0.05);
     }
+
+    /// An observation whose map rises by `step` \[m\] from `x0` \[m\] ahead of the root,
+    /// and whose first waypoint lies 1.5 m ahead over ground `g_wp`.
+    fn stepped(step: f64, x0: f64, g_wp: f64) -> Observation {
+        let mut obs = Observation::new(crate::ModelBasedController::LAYOUT);
+        let half = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
+        for r in 0..LOCAL_MAP_SIDE {
+            let x = (r as f64 - half) * LOCAL_MAP_SPACING;
+            for c in 0..LOCAL_MAP_SIDE {
+                obs.height_map[r * LOCAL_MAP_SIDE + c] = if x >= x0 { step } else { 0.0 };
+            }
+        }
+        obs.head_pos = [0.0, 0.0, 0.6];
+        for (i, w) in obs.waypoints.iter_mut().enumerate() {
+            *w = [1.5 * (i + 1) as f64, 0.0, 0.0];
+        }
+        obs.waypoint_ground = [g_wp; crate::observation::NUM_WAYPOINTS];
+        obs
+    }
+
+    #[test]
+    fn ground_ahead_comes_from_the_map_then_the_plan() {
+        let obs = stepped(0.12, 0.15, 0.36);
+        let g = Ground::new(&obs);
+        assert_eq!(g.at(-0.2, 0.0), 0.0);
+        assert!((g.at(0.3, 0.1) - 0.12).abs() < 1e-12);
+        // Beyond the map (0.35 m) towards the first waypoint (1.5 m, 0.36 m).
+        let mid = 0.5 * (MAP_HALF + 1.5);
+        assert!((g.at(mid, 0.0) - 0.24).abs() < 1e-9, "{}", g.at(mid, 0.0));
+        assert!((g.at(9.0, 0.0) - 0.36).abs() < 1e-12);
+        // A sole whose toe reaches the tread rests on it; its mean is lower.
+        assert!((g.under_sole(0.0, 0.0) - 0.12).abs() < 1e-12);
+        assert!(g.mean_under_sole(0.0, 0.0) < 0.1);
+        assert_eq!(g.under_sole(-0.3, 0.0), 0.0);
+    }
+
+    #[test]
+    fn relief_counts_a_bump_but_not_a_ramp() {
+        // A 0.08 m bump (one map row) the sole passes over between level footholds.
+        let mut bump = stepped(0.0, 0.0, 0.0);
+        for c in 0..LOCAL_MAP_SIDE {
+            bump.height_map[4 * LOCAL_MAP_SIDE + c] = 0.08;
+        }
+        let g = Ground::new(&bump);
+        let r = g.relief(-0.3, 0.0, 0.3, 0.0, 0.0, g.map_slope());
+        assert!(r > 0.06 && r < 0.08, "{r}");
+        // On flat ground nothing, on a ramp nothing either.
+        let flat = stepped(0.0, 0.0, 0.0);
+        let g = Ground::new(&flat);
+        assert_eq!(g.relief(-0.3, 0.0, 0.2, 0.0, 0.0, g.map_slope()), 0.0);
+        let mut ramp = stepped(0.0, 0.0, 0.3);
+        for r in 0..LOCAL_MAP_SIDE {
+            let x = (r as f64 - 3.5) * LOCAL_MAP_SPACING;
+            for c in 0..LOCAL_MAP_SIDE {
+                ramp.height_map[r * LOCAL_MAP_SIDE + c] = 0.2 * x;
+            }
+        }
+        let g = Ground::new(&ramp);
+        assert!((g.map_slope() - 0.2).abs() < 1e-9);
+        let r = g.relief(-0.2, -0.04, 0.2, 0.04, 0.0, g.map_slope());
+        assert!(r < 1e-9, "{r}");
+    }
 }
