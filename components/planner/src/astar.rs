@@ -58,13 +58,32 @@ pub(crate) fn body_step_ok(
     d: usize,
     a_is_start: bool,
 ) -> bool {
-    let applies = match rule {
-        CrawlBody::Off => return true,
-        CrawlBody::Zone => g.crawl_zone[a] || g.crawl_zone[b],
-        CrawlBody::Everywhere => true,
-    };
+    let applies = crawl_applies(g, rule, a, b);
     let bit = 1u8 << d;
     !applies || (g.body_fits[b] & bit != 0 && (a_is_start || g.body_fits[a] & bit != 0))
+}
+
+/// Whether the character crawls on the step from `a` to `b` under `rule`.
+#[inline]
+pub(crate) fn crawl_applies(g: &PlanGrid, rule: CrawlBody, a: usize, b: usize) -> bool {
+    match rule {
+        CrawlBody::Off => false,
+        CrawlBody::Zone => g.crawl_zone[a] || g.crawl_zone[b],
+        CrawlBody::Everywhere => true,
+    }
+}
+
+/// Extra cost of a crawled step from `a` to `b` (direction `DIRS[d]`) over uneven
+/// ground: its length times `crawl_relief_cost` times the relief at both ends
+/// (mean) \[m\].
+#[inline]
+pub(crate) fn relief_cost(g: &PlanGrid, a: usize, b: usize, d: usize) -> f64 {
+    let len = if d % 4 >= 2 {
+        g.resolution * std::f64::consts::SQRT_2
+    } else {
+        g.resolution
+    };
+    len * g.relief_cost * 0.5 * (g.relief[a] + g.relief[b]) as f64
 }
 
 /// A found path: cells from start to goal and its cost.
@@ -272,8 +291,11 @@ impl AStar {
                 }
                 // A finite cost implies the neighbour is on the grid.
                 let b = c.wrapping_add_signed(offsets[d]);
+                let mut gb = gc + w as f64;
+                if g.has_relief && crawl_applies(g, limits.crawl_body, c, b) {
+                    gb += relief_cost(g, c, b, d);
+                }
                 let nb = &mut self.node[b];
-                let gb = gc + w as f64;
                 // A closed cell is re-opened when reached cheaper: the ALT bound
                 // is admissible but, through the f32 rounding of its distances,
                 // consistent only to a few micrometres (never for `Heuristic`).

@@ -47,6 +47,13 @@ pub struct PlanGrid {
     pub crawl_zone: Vec<bool>,
     /// Whether any cell's `body_fits` is not all set (lets searches skip the check).
     pub has_body_limits: bool,
+    /// Relief under a crawling body per cell: highest minus lowest terrain within
+    /// `crawl_half_width` + one cell (a square) \[m\].
+    pub relief: Vec<f32>,
+    /// Whether any cell has relief (lets searches skip the cost).
+    pub has_relief: bool,
+    /// `PlannerSettings::crawl_relief_cost` \[1/m\].
+    pub relief_cost: f64,
     /// Edge cost per cell and direction `DIRS[d]`, `INFINITY` when the edge is off
     /// the grid or removed (wall, corner cut, infeasible slope) \[m\].
     pub edges: Vec<[f32; 8]>,
@@ -232,6 +239,31 @@ impl PlanGrid {
                 }
             }
         }
+        // Relief: separable sliding max and min over a square window.
+        let k = ((s.crawl_half_width / res).ceil() as usize + 1).max(1);
+        let mut hi_x = vec![0.0f64; n];
+        let mut lo_x = vec![0.0f64; n];
+        for j in 0..ny {
+            for i in 0..nx {
+                let (a, b) = (i.saturating_sub(k), (i + k).min(nx - 1));
+                let row = &height[j * nx + a..=j * nx + b];
+                hi_x[j * nx + i] = row.iter().copied().fold(f64::MIN, f64::max);
+                lo_x[j * nx + i] = row.iter().copied().fold(f64::MAX, f64::min);
+            }
+        }
+        let mut relief = vec![0.0f32; n];
+        for j in 0..ny {
+            let (a, b) = (j.saturating_sub(k), (j + k).min(ny - 1));
+            for i in 0..nx {
+                let (mut h, mut l) = (f64::MIN, f64::MAX);
+                for jj in a..=b {
+                    h = h.max(hi_x[jj * nx + i]);
+                    l = l.min(lo_x[jj * nx + i]);
+                }
+                relief[j * nx + i] = (h - l) as f32;
+            }
+        }
+        let has_relief = s.crawl_relief_cost > 0.0 && relief.iter().any(|&r| r > 0.0);
         let mut edges = vec![[f32::INFINITY; 8]; n];
         let tan_max_slope = s.max_slope.tan();
         for (d, &(di, dj)) in DIRS[..4].iter().enumerate() {
@@ -277,6 +309,9 @@ impl PlanGrid {
             body_fits,
             crawl_zone,
             has_body_limits,
+            relief,
+            has_relief,
+            relief_cost: s.crawl_relief_cost,
             headroom,
             free,
             edges,

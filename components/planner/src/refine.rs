@@ -82,6 +82,28 @@ impl RefineCtx<'_> {
         !applies || crawl_body_clear(self.scene, self.settings, x, y, heading)
     }
 
+    /// Extra cost per metre of crawling over uneven ground at (x, y) (see
+    /// [`PlannerSettings::crawl_relief_cost`]), 0 where the character walks.
+    fn relief_at(&self, x: f64, y: f64) -> f64 {
+        let g = self.grid;
+        if !g.has_relief {
+            return 0.0;
+        }
+        let Some(c) = g.cell_of(x, y) else {
+            return 0.0;
+        };
+        let applies = match self.limits.crawl_body {
+            CrawlBody::Off => false,
+            CrawlBody::Zone => g.crawl_zone[c],
+            CrawlBody::Everywhere => true,
+        };
+        if applies {
+            g.relief_cost * g.relief[c] as f64
+        } else {
+            0.0
+        }
+    }
+
     /// Cost of the straight segment a-b with the A* edge cost, or `None` if it leaves
     /// the free space, crosses an infeasible slope or turns the crawling body into a
     /// wall.
@@ -102,6 +124,7 @@ impl RefineCtx<'_> {
             }
             let h = self.scene.height_at(x, y);
             cost += edge_cost(self.settings, dxy.max(1e-9), h - h_prev)?;
+            cost += dxy * self.relief_at(x, y);
             h_prev = h;
         }
         Some(cost)

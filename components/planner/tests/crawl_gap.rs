@@ -148,3 +148,64 @@ fn the_crawl_through_the_gap_is_down_before_the_tunnel_and_slow() {
         .expect("stands up after the tunnel");
     assert!(pts[first_up].v <= s.form_change_speed + 1e-9);
 }
+
+/// A 0.12 m step (x >= 10) beside a crawl leg whose straight line runs 0.1 m from
+/// its edge.
+fn step_scene() -> Scene {
+    let mut terrain = HeightGrid::flat([0.0, 0.0], [20.0, 20.0], 0.1, 0.0);
+    for j in 0..terrain.ny {
+        for i in 0..terrain.nx {
+            if terrain.position(i, j)[0] >= 10.0 - 1e-9 {
+                terrain.heights[j * terrain.nx + i] = 0.12;
+            }
+        }
+    }
+    let circle = |name: &str, c: [f64; 2]| Landmark {
+        name: name.into(),
+        region: Region::Circle {
+            center: c,
+            radius: 0.5,
+        },
+    };
+    Scene {
+        name: "step".into(),
+        description: "a crawl along a step's edge".into(),
+        terrain,
+        walls: vec![],
+        dynamic: vec![],
+        tops: vec![],
+        landmarks: vec![circle("car", [9.9, 2.0]), circle("bench", [9.9, 18.0])],
+    }
+}
+
+/// Mean distance of the path from the step's edge over its middle (y in 6..14) \[m\].
+fn mean_edge_distance(settings: PlannerSettings) -> f64 {
+    let p = Planner::new(
+        step_scene(),
+        "crawl from the car to the bench",
+        [9.9, 2.0],
+        settings,
+    )
+    .unwrap();
+    let mid: Vec<f64> = p.route()[0]
+        .points
+        .iter()
+        .filter(|q| (6.0..=14.0).contains(&q.y))
+        .map(|q| (q.x - 10.0).abs())
+        .collect();
+    mid.iter().sum::<f64>() / mid.len() as f64
+}
+
+#[test]
+fn a_crawl_keeps_off_a_step_edge() {
+    let along = mean_edge_distance(PlannerSettings {
+        crawl_relief_cost: 0.0,
+        ..Default::default()
+    });
+    assert!(along < 0.25, "without the relief cost: {along:.2} m");
+    let off = mean_edge_distance(PlannerSettings::default());
+    assert!(
+        off >= 0.45,
+        "{off:.2} m from the edge (without the cost {along:.2})"
+    );
+}
