@@ -8,7 +8,7 @@ mod cmaes;
 
 use rayon::prelude::*;
 
-use plamo_physics::BackendKind;
+use plamo_physics::{BackendKind, PhysicsError};
 
 pub use cmaes::{Rng, Sample, SepCmaEs};
 
@@ -304,6 +304,10 @@ pub struct TuneSettings {
     pub terrains: Vec<String>,
 }
 
+/// Cost of a rollout whose simulation diverged \[m-equivalent\]: ten of the costliest
+/// falls.
+const DIVERGED_COST: f64 = 30.0;
+
 /// Cost per unit of mean residual force (fraction of m*g) \[m-equivalent\]: 0.1 m*g
 /// weighs as 0.2 m of XY error, so the search prefers a gait that propels itself.
 const RESIDUAL_COST: f64 = 2.0;
@@ -395,14 +399,26 @@ pub fn evaluate(params: &TunedParams, s: &TuneSettings, seed: u64) -> Result<Cos
                 },
                 accel: START_ACCEL,
             };
-            let m = run_path(
+            let m = match run_path(
                 backend,
                 scene,
                 &path,
                 s.duration,
                 &mut policy,
                 &s.controller,
-            )?;
+            ) {
+                Ok(m) => m,
+                // Gains that blow the simulation up make a bad candidate, not a failed
+                // search (a crawl tuned in MuJoCo alone spun rapier's body past 100 rad/s).
+                Err(ControllerError::Physics(PhysicsError::Diverged { .. })) => {
+                    return Ok(Cost {
+                        total: DIVERGED_COST,
+                        falls: 1.0,
+                        ..Default::default()
+                    });
+                }
+                Err(e) => return Err(e),
+            };
             let falls = f64::from(m.falls);
             Ok(Cost {
                 total: m.xy_err_mean
