@@ -34,7 +34,10 @@ fn tuning_the_crawl_writes_a_crawl_file_that_loads() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(&out).unwrap();
     assert!(text.starts_with("# Crawl parameters"), "{text}");
-    assert!(text.contains("plamo tune --form crawl --budget 1"), "{text}");
+    assert!(
+        text.contains("plamo tune --form crawl --budget 1"),
+        "{text}"
+    );
     plamo_controller::CrawlParams::load(&out).unwrap();
 }
 
@@ -42,7 +45,10 @@ fn tuning_the_crawl_writes_a_crawl_file_that_loads() {
 fn bad_tuning_arguments_are_refused_by_name() {
     let cases: [(&[&str], &str); 3] = [
         (&["--form", "hop"], "walk, run, crouch, crawl"),
-        (&["--form", "crawl", "--start-like", "walk"], "start-like works"),
+        (
+            &["--form", "crawl", "--start-like", "walk"],
+            "start-like works",
+        ),
         (&["--terrains", "ruff", "--budget", "1"], "`ruff`"),
     ];
     for (args, needle) in cases {

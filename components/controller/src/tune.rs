@@ -14,7 +14,7 @@ pub use cmaes::{Rng, Sample, SepCmaEs};
 
 use crate::error::{ControllerError, Result};
 use crate::gait::{CrawlParams, FormParams, GaitParams, ModelBasedController};
-use crate::rollout::{RampedPath, START_ACCEL, StraightPath, flat_scene, run_path};
+use crate::rollout::{RampedPath, START_ACCEL, StraightPath, ceiling_scene, flat_scene, run_path};
 use crate::settings::ControllerSettings;
 
 /// The locomotion form whose parameters are tuned.
@@ -298,9 +298,10 @@ pub struct TuneSettings {
     pub sigma0: f64,
     /// Controller settings (residual caps) used in the rollouts.
     pub controller: ControllerSettings,
-    /// Ground of the rollouts, assigned round-robin: `flat` or the name of a built-in
-    /// terrain strip without its `terrain-` prefix (`slope`, `rough`, `stairs`; the
-    /// strips of `plamo eval locomotion`).
+    /// Ground of the rollouts, assigned round-robin: `flat`, `ceiling` (flat under a
+    /// 0.6 m ceiling, for the crawl) or the name of a built-in terrain strip without
+    /// its `terrain-` prefix (`slope`, `rough`, `stairs`; the strips of `plamo eval
+    /// locomotion`).
     pub terrains: Vec<String>,
 }
 
@@ -341,16 +342,19 @@ pub struct Generation {
     pub sigma: f64,
 }
 
-/// The ground named `name` and where a rollout starts on it: a flat plane, or a built-in
-/// terrain strip (x 5 -> 35 m), started where `plamo eval locomotion` starts.
+/// The ground named `name` and where a rollout starts on it: a flat plane, the flat
+/// plane with the crawl bench's 0.6 m ceiling (`ceiling`, [`ceiling_scene`]), or a
+/// built-in terrain strip (x 5 -> 35 m), started where `plamo eval locomotion` starts.
 pub fn terrain_scene(name: &str) -> Result<(plamo_scenes::Scene, [f64; 2])> {
-    if name == "flat" {
-        return Ok((flat_scene(60.0), [0.0, 0.0]));
+    match name {
+        "flat" => return Ok((flat_scene(60.0), [0.0, 0.0])),
+        "ceiling" => return Ok((ceiling_scene(60.0), [0.0, 0.0])),
+        _ => {}
     }
     let scene = plamo_scenes::builtin(&format!("terrain-{name}")).map_err(|e| {
         ControllerError::InvalidSettings {
             field: "terrains",
-            reason: format!("unknown terrain `{name}` (flat, slope, rough, stairs): {e}"),
+            reason: format!("unknown terrain `{name}` (flat, slope, rough, stairs, ceiling): {e}"),
         }
     })?;
     Ok((scene, [5.0, 3.0]))

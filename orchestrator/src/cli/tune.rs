@@ -44,7 +44,8 @@ pub struct TuneArgs {
     #[arg(long)]
     start_like: Option<String>,
     /// Ground of the rollouts, comma-separated, assigned round-robin: flat, slope,
-    /// rough, stairs (the strips of `plamo eval locomotion`).
+    /// rough, stairs (the strips of `plamo eval locomotion`), ceiling (flat under a
+    /// 0.6 m ceiling, for the crawl).
     #[arg(long, default_value = "flat")]
     terrains: String,
     /// Output parameter file (default: gait.toml, or crawl.toml with `--form crawl`).
