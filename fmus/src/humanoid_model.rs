@@ -238,6 +238,7 @@ pub fn build(
         instructions: vec![text(values, spec, "instructions")],
         backend: kind,
         seed,
+        params: Default::default(),
     };
     let shapes = [ObstacleShape::Sphere { radius }; EXTERNAL_OBSTACLES];
     let links = in_process_with_external(&run, &scene, &shapes).map_err(|e| e.to_string())?;

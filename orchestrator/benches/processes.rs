@@ -147,6 +147,7 @@ fn main() {
             instructions: vec![ROUTE.into()],
             backend,
             seed: 0,
+            params: Default::default(),
         };
         let n = variants.len() + 1;
         let mut timings: Vec<Vec<Timing>> = (0..n).map(|_| Vec::new()).collect();

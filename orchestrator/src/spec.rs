@@ -2,7 +2,11 @@
 //! components are built from it. The orchestrator and every component process build
 //! from the same [`RunSpec`], so they agree on the scene, the agents and their start.
 
-use plamo_controller::{ControllerComponent, ControllerSettings};
+use std::path::PathBuf;
+
+use plamo_controller::{
+    ControllerComponent, ControllerSettings, CrawlParams, GaitParams, ModelBasedController,
+};
 use plamo_physics::{BackendKind, PhysicsComponent, PhysicsSettings, Placement};
 use plamo_planner::{Planner, PlannerComponent, PlannerSettings, Source, parse_instructions};
 use plamo_scenes::Scene;
@@ -24,6 +28,18 @@ pub struct RunSpec {
     pub backend: BackendKind,
     /// Seed of the start-heading perturbation.
     pub seed: u64,
+    /// The controller's parameter files (default: the built-in ones).
+    pub params: ParamFiles,
+}
+
+/// Parameter files for the model-based controller, e.g. from `plamo tune`; `None`
+/// keeps the built-in file.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ParamFiles {
+    /// Biped gait parameters (`gait.toml` layout).
+    pub gait: Option<PathBuf>,
+    /// Crawl parameters (`crawl.toml` layout).
+    pub crawl: Option<PathBuf>,
 }
 
 fn setup(e: impl std::fmt::Display) -> RunError {
@@ -81,10 +97,24 @@ impl RunSpec {
         Ok(PlannerComponent::new(planner, k as u32))
     }
 
-    /// Agent `k`'s controller (default model-based policy).
+    /// Agent `k`'s controller: the model-based policy with the spec's parameter files.
     pub fn controller(&self, scene: &Scene, k: usize) -> Result<ControllerComponent, RunError> {
-        ControllerComponent::new(k as u32, scene.clone(), ControllerSettings::default())
-            .map_err(setup)
+        let gait = match &self.params.gait {
+            Some(p) => GaitParams::load(p).map_err(setup)?,
+            None => GaitParams::default(),
+        };
+        let crawl = match &self.params.crawl {
+            Some(p) => CrawlParams::load(p).map_err(setup)?,
+            None => CrawlParams::default(),
+        };
+        let policy =
+            ModelBasedController::with_all_params(gait, crawl, ControllerSettings::default())
+                .map_err(setup)?;
+        Ok(ControllerComponent::with_policy(
+            k as u32,
+            scene.clone(),
+            Box::new(policy),
+        ))
     }
 
     /// The physics world with every agent at its start.
@@ -145,11 +175,17 @@ impl RunSpec {
             }
             scene = format!("...{}", &scene[cut..]);
         }
+        let file = |f: &Option<PathBuf>| {
+            f.as_ref()
+                .map_or("built-in".to_string(), |p| p.display().to_string())
+        };
         format!(
-            "scene {scene}, physics {}, seed {}, {} agent(s), instructions #{h:016x}",
+            "scene {scene}, physics {}, seed {}, {} agent(s), instructions #{h:016x}, gait {}, crawl {}",
             self.backend,
             self.seed,
-            self.agents()
+            self.agents(),
+            file(&self.params.gait),
+            file(&self.params.crawl)
         )
     }
 
@@ -166,6 +202,15 @@ impl RunSpec {
         for i in &self.instructions {
             a.push("--instructions".into());
             a.push(i.clone());
+        }
+        for (flag, file) in [
+            ("--gait-params", &self.params.gait),
+            ("--crawl-params", &self.params.crawl),
+        ] {
+            if let Some(f) = file {
+                a.push(flag.into());
+                a.push(f.display().to_string());
+            }
         }
         a
     }

@@ -608,3 +608,37 @@ fn the_trajectory_records_the_falls_the_summary_counts() {
     }
     eprintln!("{total} falls recorded and counted");
 }
+
+#[test]
+fn parameter_files_from_tune_drive_the_controller_in_both_modes() {
+    // A gait file like `plamo tune` writes, with a slower run cadence.
+    let dir = out_dir("params");
+    let mut gait = plamo_controller::GaitParams::default();
+    gait.run.step_time += 0.03;
+    gait.walk.step_time += 0.03;
+    let file = dir.join("gait.toml");
+    std::fs::write(&file, plamo_controller::to_toml(&gait, "test").unwrap()).unwrap();
+    let base = ["--instructions", ROUTE, "--max-seconds", "3", "--seed", "7"];
+    let mut args = base.to_vec();
+    args.extend(["--gait-params", file.to_str().unwrap()]);
+    let tuned = same_in_both_modes(&args, "cli-test-params");
+    let built_in = run_ok(&base, &out_dir("params-built-in"));
+    assert_ne!(
+        digest(&tuned),
+        digest(&built_in),
+        "the file changed nothing"
+    );
+    // A file that is not there, or not a crawl file, is named.
+    for (flag, path) in [
+        ("--crawl-params", dir.join("missing.toml")),
+        ("--crawl-params", file.clone()),
+    ] {
+        let o = plamo(&["--instructions", ROUTE, "--max-seconds", "1"])
+            .args([flag, path.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{flag} {}", path.display());
+        assert!(err.contains(path.to_str().unwrap()), "{err}");
+    }
+}

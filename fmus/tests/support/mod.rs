@@ -98,6 +98,7 @@ pub fn route_lockstep(seed: u64) -> (Lockstep, usize) {
         instructions: vec![INSTRUCTIONS.into()],
         backend: BackendKind::Rapier,
         seed,
+        params: Default::default(),
     };
     let scene = spec.load_scene().expect("playground");
     let count = plamo_planner::parse_instructions(INSTRUCTIONS, &scene)

@@ -18,7 +18,7 @@ use plamo::ipc::IpcSettings;
 use plamo::lockstep::{InstructionReport, Lockstep, StepStatus, median_p99, pace};
 use plamo::processes::{Launch, ProcessRun, component_args};
 use plamo::record::Recorder;
-use plamo::spec::RunSpec;
+use plamo::spec::{ParamFiles, RunSpec};
 use plamo::viz::{ColorBar, MapOverlay, OverlayMarker, OverlayPath, render_map};
 
 /// What decides a run's result; shared by `plamo run` and `plamo component`.
@@ -39,6 +39,13 @@ pub struct SpecArgs {
     /// Number of humanoids (default: one per `--instructions`).
     #[arg(long)]
     agents: Option<usize>,
+    /// Biped gait parameter file, e.g. from `plamo tune` (default: the built-in one).
+    #[arg(long)]
+    gait_params: Option<PathBuf>,
+    /// Crawl parameter file, e.g. from `plamo tune --form crawl` (default: the
+    /// built-in one).
+    #[arg(long)]
+    crawl_params: Option<PathBuf>,
 }
 
 impl SpecArgs {
@@ -61,6 +68,19 @@ impl SpecArgs {
             instructions,
             backend: self.physics,
             seed: self.seed,
+            // Absolute, so component processes started elsewhere find the same files.
+            params: ParamFiles {
+                gait: self
+                    .gait_params
+                    .as_deref()
+                    .map(std::path::absolute)
+                    .transpose()?,
+                crawl: self
+                    .crawl_params
+                    .as_deref()
+                    .map(std::path::absolute)
+                    .transpose()?,
+            },
         })
     }
 }

@@ -124,6 +124,7 @@ pub fn plan(spec: &EpisodeSpec) -> Result<(RunSpec, Planner), String> {
         instructions: vec![spec.instructions.clone()],
         backend: spec.backend,
         seed: spec.seed,
+        params: Default::default(),
     };
     let p = run.placement(spec.scene, 0).map_err(|e| e.to_string())?;
     let planner = Planner::new(
