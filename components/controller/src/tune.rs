@@ -14,7 +14,9 @@ pub use cmaes::{Rng, Sample, SepCmaEs};
 
 use crate::error::{ControllerError, Result};
 use crate::gait::{CrawlParams, FormParams, GaitParams, ModelBasedController};
-use crate::rollout::{RampedPath, START_ACCEL, StraightPath, ceiling_scene, flat_scene, run_path};
+use crate::rollout::{
+    ArcPath, HeadPath, RampedPath, START_ACCEL, StraightPath, ceiling_scene, flat_scene, run_path,
+};
 use crate::settings::ControllerSettings;
 
 /// The locomotion form whose parameters are tuned.
@@ -299,7 +301,8 @@ pub struct TuneSettings {
     /// Controller settings (residual caps) used in the rollouts.
     pub controller: ControllerSettings,
     /// Ground of the rollouts, assigned round-robin: `flat`, `ceiling` (flat under a
-    /// 0.6 m ceiling, for the crawl) or the name of a built-in terrain strip without
+    /// 0.6 m ceiling, for the crawl), `arc` (a turn on flat ground, left and right
+    /// alternately; its cost counts the heading too) or the name of a built-in terrain strip without
     /// its `terrain-` prefix (`slope`, `rough`, `stairs`; the strips of `plamo eval
     /// locomotion`).
     pub terrains: Vec<String>,
@@ -308,6 +311,14 @@ pub struct TuneSettings {
 /// Cost of a rollout whose simulation diverged \[m-equivalent\]: ten of the costliest
 /// falls.
 const DIVERGED_COST: f64 = 30.0;
+
+/// Turn radius of the `arc` rollouts, left and right alternately \[m\].
+const ARC_RADIUS: f64 = 4.0;
+
+/// Cost per unit of the paper's direction reward missed on an `arc` rollout
+/// \[m-equivalent\]: a body can follow a turning path sideways, so its XY error alone
+/// does not see a lost heading.
+const ARC_HEADING_COST: f64 = 2.0;
 
 /// Cost per unit of mean residual force (fraction of m*g) \[m-equivalent\]: 0.1 m*g
 /// weighs as 0.2 m of XY error, so the search prefers a gait that propels itself.
@@ -374,10 +385,15 @@ pub fn evaluate(params: &TunedParams, s: &TuneSettings, seed: u64) -> Result<Cos
             (b, lo + (hi - lo) * (i as f64 + rng.uniform()) / k)
         })
         .collect();
+    // `arc` turns on flat ground (a crawl tuned on straight paths alone lost its
+    // heading control); every other name is a ground for a straight path.
     let grounds = s
         .terrains
         .iter()
-        .map(|t| terrain_scene(t))
+        .map(|t| match t.as_str() {
+            "arc" => Ok((flat_scene(60.0), [0.0, 0.0], true)),
+            _ => terrain_scene(t).map(|(scene, start)| (scene, start, false)),
+        })
         .collect::<Result<Vec<_>>>()?;
     if grounds.is_empty() {
         return Err(ControllerError::InvalidSettings {
@@ -394,19 +410,29 @@ pub fn evaluate(params: &TunedParams, s: &TuneSettings, seed: u64) -> Result<Cos
                 params.crawl,
                 s.controller.clone(),
             )?;
-            let (scene, start) = &grounds[(k % s.rollouts.max(1)) % grounds.len()];
-            let path = RampedPath {
-                line: StraightPath {
+            let (scene, start, arc) = &grounds[(k % s.rollouts.max(1)) % grounds.len()];
+            let path: Box<dyn HeadPath> = if *arc {
+                Box::new(ArcPath {
                     start: *start,
                     speed,
                     head_height: head,
-                },
-                accel: START_ACCEL,
+                    straight: 2.0,
+                    radius: if k % 2 == 0 { ARC_RADIUS } else { -ARC_RADIUS },
+                })
+            } else {
+                Box::new(RampedPath {
+                    line: StraightPath {
+                        start: *start,
+                        speed,
+                        head_height: head,
+                    },
+                    accel: START_ACCEL,
+                })
             };
             let m = match run_path(
                 backend,
                 scene,
-                &path,
+                path.as_ref(),
                 s.duration,
                 &mut policy,
                 &s.controller,
@@ -424,11 +450,17 @@ pub fn evaluate(params: &TunedParams, s: &TuneSettings, seed: u64) -> Result<Cos
                 Err(e) => return Err(e),
             };
             let falls = f64::from(m.falls);
+            let heading = if *arc {
+                ARC_HEADING_COST * (1.0 - m.mean_reward.dir)
+            } else {
+                0.0
+            };
             Ok(Cost {
                 total: m.xy_err_mean
                     + s.form.z_weight() * m.z_err_mean
                     + RESIDUAL_COST * m.residual_force_mean
-                    + s.form.fall_cost() * falls,
+                    + s.form.fall_cost() * falls
+                    + heading,
                 falls,
                 xy: m.xy_err_mean,
                 z: m.z_err_mean,

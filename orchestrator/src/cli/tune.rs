@@ -45,7 +45,7 @@ pub struct TuneArgs {
     start_like: Option<String>,
     /// Ground of the rollouts, comma-separated, assigned round-robin: flat, slope,
     /// rough, stairs (the strips of `plamo eval locomotion`), ceiling (flat under a
-    /// 0.6 m ceiling, for the crawl).
+    /// 0.6 m ceiling, for the crawl), arc (4 m turns on flat ground).
     #[arg(long, default_value = "flat")]
     terrains: String,
     /// Output parameter file (default: gait.toml, or crawl.toml with `--form crawl`).
