@@ -18,6 +18,7 @@ use std::error::Error;
 use plamo_controller::{
     ArcPath, ControllerSettings, CrawlParams, GaitParams, HeadPath, MetricsSummary,
     ModelBasedController, RisingPath, StraightPath, ceiling_scene, flat_scene, run_path,
+    staggered_start,
 };
 use plamo_physics::BackendKind;
 use rayon::prelude::*;
@@ -80,10 +81,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                                 [5.0, 3.0],
                             )
                         };
-                        let start = [
-                            origin[0] + 0.37 * r as f64,
-                            origin[1] + 0.1 * (r % 3) as f64 - 0.1,
-                        ];
+                        let start = staggered_start(origin, r);
                         let path: Box<dyn HeadPath> = if drop {
                             Box::new(DropPath {
                                 start,
@@ -249,10 +247,7 @@ fn trace(
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(0);
-    let start = [
-        origin[0] + 0.37 * r as f64,
-        origin[1] + 0.1 * (r % 3) as f64 - 0.1,
-    ];
+    let start = staggered_start(origin, r);
     // `PLAMO_TRACE_DROP_AT`: walk at `speed` and drop to the crawl then (see `drop`).
     let path: Box<dyn HeadPath> = match std::env::var("PLAMO_TRACE_DROP_AT") {
         Ok(v) => Box::new(DropPath {

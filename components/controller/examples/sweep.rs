@@ -11,13 +11,11 @@ use std::error::Error;
 
 use plamo_controller::{
     ArcPath, ControllerSettings, GaitParams, HeadPath, MetricsSummary, ModelBasedController,
-    RampedPath, START_ACCEL, StraightPath, flat_scene, run_path, terrain_scene,
+    RUN_STAGGER, RampedPath, START_ACCEL, STRIP_LENGTH, StraightPath, flat_scene, run_path,
+    staggered_start, terrain_scene,
 };
 use plamo_physics::BackendKind;
 use rayon::prelude::*;
-
-/// Usable length of a terrain strip from its start \[m\] (as in `plamo eval locomotion`).
-const STRIP: f64 = 30.0;
 
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -60,17 +58,14 @@ fn main() -> Result<(), Box<dyn Error>> {
                 .map(|r| {
                     let mut policy =
                         ModelBasedController::with_params(params, settings.clone()).unwrap();
-                    let start = [
-                        strip_start[0] + 0.37 * r as f64,
-                        strip_start[1] + 0.1 * (r % 3) as f64 - 0.1,
-                    ];
+                    let start = staggered_start(strip_start, r);
                     let (scene, duration) = if terrain == "flat" {
                         (flat_scene(speed * duration + 10.0), duration)
                     } else {
                         // A strip is 30 m long from its start.
                         (
                             strip.clone(),
-                            duration.min((STRIP - 0.37 * r as f64) / speed),
+                            duration.min((STRIP_LENGTH - RUN_STAGGER * r as f64) / speed),
                         )
                     };
                     let path: Box<dyn HeadPath> = if arc {

@@ -37,8 +37,8 @@ pub use observation::{
 pub use onnx_policy::{OnnxPolicy, PolicySidecar};
 pub use policy::{Action, Policy, RootWrench};
 pub use rollout::{
-    ArcPath, HeadPath, RampedPath, RisingPath, START_ACCEL, StraightPath, ceiling_scene,
-    control_step, flat_scene, run_path, run_straight,
+    ArcPath, HeadPath, RUN_STAGGER, RampedPath, RisingPath, START_ACCEL, STRIP_LENGTH,
+    StraightPath, ceiling_scene, control_step, flat_scene, run_path, run_straight, staggered_start,
 };
 pub use settings::{ControllerSettings, GRAVITY};
 pub use tune::{

@@ -238,6 +238,23 @@ pub fn ceiling_scene(length: f64) -> Scene {
     scene
 }
 
+/// Length of the built-in terrain strips from where a run starts on them \[m\]
+/// (`terrain-*` scenes, x 5 -> 35 m; see [`crate::terrain_scene`]).
+pub const STRIP_LENGTH: f64 = 30.0;
+
+/// How much further along +X each run of a sweep starts \[m\]: every run meets the
+/// terrain at another phase of its steps.
+pub const RUN_STAGGER: f64 = 0.37;
+
+/// Where run `r` of a sweep starts from `origin`: [`RUN_STAGGER`] further along +X
+/// per run and -0.1, 0 or 0.1 m sideways in turn.
+pub fn staggered_start(origin: [f64; 2], r: usize) -> [f64; 2] {
+    [
+        origin[0] + RUN_STAGGER * r as f64,
+        origin[1] + 0.1 * (r % 3) as f64 - 0.1,
+    ]
+}
+
 /// Runs `policy` along `path` for `duration` \[s\] with the chosen physics engine. A
 /// fall is counted, and the humanoid is put back standing on the plan's current
 /// point (ProtoMotions-style reset).

@@ -5,8 +5,8 @@
 #![cfg(feature = "mujoco")]
 
 use plamo_controller::{
-    ArcPath, ControllerSettings, MetricsSummary, ModelBasedController, RampedPath, START_ACCEL,
-    StraightPath, flat_scene, run_path, terrain_scene,
+    ArcPath, ControllerSettings, MetricsSummary, ModelBasedController, RUN_STAGGER, RampedPath,
+    START_ACCEL, STRIP_LENGTH, StraightPath, flat_scene, run_path, staggered_start, terrain_scene,
 };
 use plamo_physics::BackendKind;
 
@@ -137,16 +137,13 @@ fn walk_climbs_and_descends_stairs_in_mujoco() {
             let mut policy = ModelBasedController::new(settings.clone()).unwrap();
             let path = RampedPath {
                 line: StraightPath {
-                    start: [
-                        start[0] + 0.37 * r as f64,
-                        start[1] + 0.1 * (r % 3) as f64 - 0.1,
-                    ],
+                    start: staggered_start(start, r),
                     speed,
                     head_height: 1.47,
                 },
                 accel: START_ACCEL,
             };
-            let duration = ((30.0 - 0.37 * r as f64) / speed).min(20.0);
+            let duration = ((STRIP_LENGTH - RUN_STAGGER * r as f64) / speed).min(20.0);
             let m = run_path(
                 BackendKind::Mujoco,
                 &scene,

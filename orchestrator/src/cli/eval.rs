@@ -20,8 +20,8 @@ use plamo::eval::slalom::{self, QpConfig, Slalom};
 use plamo::eval::{self, Experiment, RunOptions, Shard};
 use plamo::viz::{FAMILY, ensure_registered};
 use plamo_controller::{
-    ControllerSettings, GaitParams, MetricsSummary, ModelBasedController, RampedPath, START_ACCEL,
-    StraightPath, run_path, terrain_scene,
+    ControllerSettings, GaitParams, MetricsSummary, ModelBasedController, RUN_STAGGER, RampedPath,
+    START_ACCEL, STRIP_LENGTH, StraightPath, run_path, staggered_start, terrain_scene,
 };
 use plamo_physics::BackendKind;
 use plamo_scenes::Scene;
@@ -204,8 +204,6 @@ const PAPER: [[(f64, f64); 4]; 4] = [
     [(0.25, 0.10), (0.25, 0.04), (0.29, 0.24), (0.79, 0.31)],
     [(0.45, 0.13), (0.41, 0.07), (0.39, 0.27), (1.01, 0.35)],
 ];
-/// Length of the straight stretch of the builtin terrain strips [m] (x 5 -> 35).
-const STRIP: f64 = 30.0;
 
 /// Mean results of one cell.
 #[derive(Debug, Clone, Copy, Default, serde::Serialize)]
@@ -278,16 +276,15 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
             // Runs differ by where they start along the strip and sideways [m].
             let path = RampedPath {
                 line: StraightPath {
-                    start: [
-                        start[0] + 0.37 * r as f64,
-                        start[1] + 0.1 * (r % 3) as f64 - 0.1,
-                    ],
+                    start: staggered_start(*start, r),
                     speed,
                     head_height: head,
                 },
                 accel: START_ACCEL,
             };
-            let duration = a.duration.min((STRIP - 0.37 * r as f64) / speed);
+            let duration = a
+                .duration
+                .min((STRIP_LENGTH - RUN_STAGGER * r as f64) / speed);
             let mut policy = ModelBasedController::with_params(params, settings.clone())?;
             let m = run_path(backend, scene, &path, duration, &mut policy, &settings)?;
             bar.inc(1);
