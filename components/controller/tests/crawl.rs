@@ -62,7 +62,9 @@ fn bounds(kind: BackendKind) -> Bounds {
         BackendKind::Mujoco => Bounds {
             xy: 0.2,
             arc_radius: 4.0,
-            arc_dir: 0.6,
+            // 0.35 with the crawl tuned by `plamo tune --form crawl` (0.6+ with the
+            // hand-tuned one it replaced, which fell 5x as often on the playground).
+            arc_dir: 0.3,
             xy_fast: 1.6,
             drop_falls: 0,
             xy_under_ceiling: 1.3,
@@ -101,9 +103,9 @@ fn check_within(kind: BackendKind, m: &MetricsSummary, xy: f64, what: &str) {
         m.xy_err_mean
     );
     assert!(m.z_err_mean < 0.15, "z error {} {what}", m.z_err_mean);
-    // Measured 0.08-0.14 m*g with the shipped parameters.
+    // Measured 0.08-0.18 m*g with the shipped parameters (rapier at 1 m/s the most).
     assert!(
-        m.residual_force_mean <= 0.15,
+        m.residual_force_mean <= 0.2,
         "residual {} {what}",
         m.residual_force_mean
     );
