@@ -38,6 +38,7 @@ fn spec(backend: BackendKind, seed: u64, agents: usize) -> RunSpec {
         instructions: vec![ROUTE.into(); agents],
         backend,
         seed,
+        params: Default::default(),
     }
 }
 
