@@ -39,6 +39,9 @@ fn tuning_the_crawl_writes_a_crawl_file_that_loads() {
         "{text}"
     );
     plamo_controller::CrawlParams::load(&out).unwrap();
+    // Not a terminal: progress comes as one log line per generation.
+    let log = String::from_utf8_lossy(&o.stderr);
+    assert!(log.contains("generation 1/1: best cost"), "{log}");
 }
 
 #[test]

@@ -3,6 +3,7 @@
 //! deterministic per seed; writes the whole parameter file of the form: the biped's
 //! `gait.toml` for walk, run and crouch, `crawl.toml` for the crawl.
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -98,12 +99,19 @@ pub fn run(args: TuneArgs) -> anyhow::Result<ExitCode> {
         ProgressStyle::with_template("{bar:30} {pos}/{len} gen  {msg}  [{elapsed} < {eta}]")
             .context("progress template")?,
     );
+    // A bar is drawn only on a terminal; a tune run from a script or a cluster job (15
+    // minutes and more) logs one line per generation instead.
+    let log_lines = !std::io::stderr().is_terminal();
     let (best, cost) = tune(&base, &settings, |g| {
-        bar.set_position(u64::from(g.index));
-        bar.set_message(format!(
+        let line = format!(
             "cost {:.3} (falls {:.2}, xy {:.3} m, z {:.3} m, residual {:.3} mg) sigma {:.3}",
             g.best.total, g.best.falls, g.best.xy, g.best.z, g.best.residual, g.sigma
-        ));
+        );
+        if log_lines {
+            eprintln!("generation {}/{}: best {line}", g.index, args.budget);
+        }
+        bar.set_position(u64::from(g.index));
+        bar.set_message(line);
     })?;
     bar.finish();
     let (what, version) = match form {
