@@ -373,18 +373,13 @@ pub fn terrain_scene(name: &str) -> Result<(plamo_scenes::Scene, [f64; 2])> {
 
 /// Evaluates `params` on the scenarios drawn for `seed` (same seed, same scenarios).
 pub fn evaluate(params: &TunedParams, s: &TuneSettings, seed: u64) -> Result<Cost> {
-    let (head, [lo, hi]) = s.form.task();
-    let mut rng = Rng::new(seed);
-    let jobs: Vec<(BackendKind, f64)> = s
-        .backends
-        .iter()
-        .flat_map(|&b| (0..s.rollouts).map(move |i| (b, i)))
-        .map(|(b, i)| {
-            // Stratified speeds over the range, each jittered within its stratum.
-            let k = s.rollouts.max(1) as f64;
-            (b, lo + (hi - lo) * (i as f64 + rng.uniform()) / k)
-        })
-        .collect();
+    evaluate_on(&grounds(s)?, params, s, seed)
+}
+
+/// The rollouts' grounds for `s.terrains` (scene, start, whether the path is an arc):
+/// built once per search, not per candidate (a terrain strip is generated from its
+/// scene file).
+fn grounds(s: &TuneSettings) -> Result<Vec<(plamo_scenes::Scene, [f64; 2], bool)>> {
     // `arc` turns on flat ground (a crawl tuned on straight paths alone lost its
     // heading control); every other name is a ground for a straight path.
     let grounds = s
@@ -401,6 +396,28 @@ pub fn evaluate(params: &TunedParams, s: &TuneSettings, seed: u64) -> Result<Cos
             reason: "no terrain to tune on (flat, slope, rough, stairs)".into(),
         });
     }
+    Ok(grounds)
+}
+
+/// [`evaluate`] on grounds already built by [`grounds`].
+fn evaluate_on(
+    grounds: &[(plamo_scenes::Scene, [f64; 2], bool)],
+    params: &TunedParams,
+    s: &TuneSettings,
+    seed: u64,
+) -> Result<Cost> {
+    let (head, [lo, hi]) = s.form.task();
+    let mut rng = Rng::new(seed);
+    let jobs: Vec<(BackendKind, f64)> = s
+        .backends
+        .iter()
+        .flat_map(|&b| (0..s.rollouts).map(move |i| (b, i)))
+        .map(|(b, i)| {
+            // Stratified speeds over the range, each jittered within its stratum.
+            let k = s.rollouts.max(1) as f64;
+            (b, lo + (hi - lo) * (i as f64 + rng.uniform()) / k)
+        })
+        .collect();
     let results: Vec<Result<Cost>> = jobs
         .par_iter()
         .enumerate()
@@ -541,7 +558,8 @@ pub fn tune(
 ) -> Result<(TunedParams, Cost)> {
     let mut rng = Rng::new(s.seed);
     let mut es = SepCmaEs::new(encode(base, s.form), s.sigma0, 0);
-    let mut best = (*base, evaluate(base, s, s.seed)?);
+    let grounds = grounds(s)?;
+    let mut best = (*base, evaluate_on(&grounds, base, s, s.seed)?);
     for g in 1..=s.generations {
         // One scenario set for the whole run: a deterministic objective.
         let scenario_seed = s.seed;
@@ -553,7 +571,7 @@ pub fn tune(
             // Out-of-box candidates are clamped and pay for the distance.
             let outside: f64 = smp.x.iter().map(|v| (v - v.clamp(0.0, 1.0)).powi(2)).sum();
             let c = match p.validate() {
-                Ok(()) => evaluate(&p, s, scenario_seed)?,
+                Ok(()) => evaluate_on(&grounds, &p, s, scenario_seed)?,
                 Err(_) => Cost {
                     total: 1e3,
                     ..Default::default()
@@ -577,7 +595,7 @@ pub fn tune(
         });
     }
     // Final score on the base scenarios.
-    let c = evaluate(&best.0, s, s.seed)?;
+    let c = evaluate_on(&grounds, &best.0, s, s.seed)?;
     Ok((best.0, c))
 }
 
