@@ -7,14 +7,19 @@
 //!
 //! On a strip the runs start where `plamo eval locomotion` starts them (0.37 m apart
 //! along the strip, 0.1 m apart sideways) and stop before its 30 m end.
+//!
+//! `PLAMO_TRACE=R` traces run R of the first engine and speed instead: the body's
+//! state every 1/15 s over the 1.5 s before each fall (what the body did in the fall;
+//! `PLAMO_TRACE_ALL=1`: all along).
 use std::error::Error;
 
 use plamo_controller::{
-    ArcPath, ControllerSettings, GaitParams, HeadPath, MetricsSummary, ModelBasedController,
-    RUN_STAGGER, RampedPath, START_ACCEL, STRIP_LENGTH, StraightPath, flat_scene, run_path,
-    staggered_start, terrain_scene,
+    Action, ArcPath, ControllerSettings, GaitParams, HeadPath, MetricsSummary,
+    ModelBasedController, Observation, Policy, RUN_STAGGER, RampedPath, START_ACCEL, STRIP_LENGTH,
+    StraightPath, control_step, flat_scene, run_path, staggered_start, terrain_scene,
 };
-use plamo_physics::BackendKind;
+use plamo_physics::{BackendKind, FEET, HumanoidPose, PhysicsSettings, create_backend};
+use plamo_scenes::Scene;
 use rayon::prelude::*;
 
 fn main() -> Result<(), Box<dyn Error>> {
@@ -51,6 +56,29 @@ fn main() -> Result<(), Box<dyn Error>> {
         Some(p) => GaitParams::load(std::path::Path::new(&p))?,
         None => GaitParams::default(),
     };
+    if let Some(r) = std::env::var_os("PLAMO_TRACE") {
+        let r: usize = r.to_string_lossy().parse()?;
+        let speed = speeds[0];
+        let start = staggered_start(strip_start, r);
+        let path = RampedPath {
+            line: StraightPath {
+                start,
+                speed,
+                head_height: head,
+            },
+            accel: START_ACCEL,
+        };
+        let (scene, duration) = if terrain == "flat" {
+            (flat_scene(speed * duration + 10.0), duration)
+        } else {
+            (
+                strip.clone(),
+                duration.min((STRIP_LENGTH - RUN_STAGGER * r as f64) / speed),
+            )
+        };
+        let mut policy = ModelBasedController::with_params(params, settings.clone())?;
+        return trace(engines[0], &scene, &path, duration, &mut policy, &settings);
+    }
     for &engine in &engines {
         for &speed in &speeds {
             let results: Vec<_> = (0..runs)
@@ -119,6 +147,103 @@ fn main() -> Result<(), Box<dyn Error>> {
                 }
             );
         }
+    }
+    Ok(())
+}
+
+/// Pitch of a body's x axis below the horizontal, + forward \[rad\], from `[w, x, y, z]`.
+fn pitch_of(q: [f64; 4]) -> f64 {
+    let [w, x, y, z] = q;
+    (-(2.0 * (x * z - w * y))).clamp(-1.0, 1.0).asin()
+}
+
+/// The run of `path` with a line per 1/15 s kept for the 1.5 s before each fall.
+fn trace(
+    engine: BackendKind,
+    scene: &Scene,
+    path: &dyn HeadPath,
+    duration: f64,
+    policy: &mut ModelBasedController,
+    settings: &ControllerSettings,
+) -> Result<(), Box<dyn Error>> {
+    let mut physics = create_backend(engine, scene, &PhysicsSettings::default())?;
+    let p0 = path.point(scene, 0.0);
+    physics.reset(&HumanoidPose::standing_on(&scene.terrain, p0.x, p0.y, 0.0))?;
+    policy.reset();
+    let mut obs = Observation::new(ModelBasedController::LAYOUT);
+    let mut action = Action::zeros(ModelBasedController::LAYOUT.num_joints);
+    let mut lines: std::collections::VecDeque<String> = Default::default();
+    // PLAMO_TRACE_ALL=1: every line, not only those before a fall.
+    let all = std::env::var_os("PLAMO_TRACE_ALL").is_some();
+    println!(
+        "t, x pelvis, ground, slope, pelvis h, pitch, vx, vz, head h, lag, foot R (dx, h), foot L (dx, h), knees, contact"
+    );
+    for c in 0..(duration * 30.0) as usize {
+        let t = c as f64 / 30.0;
+        let s = physics.state().clone();
+        let g = |x: f64, y: f64| scene.height_at(x, y);
+        let [px, py, pz] = s.root_position;
+        let ground = g(px, py);
+        let head_h = s.head[2] - g(s.head[0], s.head[1]);
+        let target = path.point(scene, t);
+        let fallen = settings.is_fallen(head_h, path.head_height());
+        let foot = |f: usize| {
+            let p = s.body_pos[FEET[f]];
+            format!("({:5.2},{:5.2})", p[0] - px, p[2] - g(p[0], p[1]))
+        };
+        let knee = |n: &str| s.joint_pos[plamo_physics::humanoid::joint_index(n).unwrap()];
+        if c % 2 == 0 {
+            lines.push_back(format!(
+                "{t:6.2}{} {px:6.2} {ground:5.2} {:5.2} {:5.2} {:5.2} {:5.2} {:5.2} {head_h:5.2} {:5.2} {} {} {:5.2},{:5.2} {}{}",
+                if policy.is_crawling() { "c" } else { " " },
+                (g(px + 0.4, py) - g(px - 0.4, py)) / 0.8,
+                pz - ground,
+                pitch_of(s.root_quat),
+                s.root_linvel[0],
+                s.root_linvel[2],
+                target.x - s.head[0],
+                foot(0),
+                foot(1),
+                knee("right_knee"),
+                knee("left_knee"),
+                (0..plamo_physics::NUM_BODIES)
+                    .filter(|&b| s.contact[b] && !FEET.contains(&b))
+                    .map(|b| plamo_physics::BODY_NAMES[b])
+                    .collect::<Vec<_>>()
+                    .join(","),
+                if fallen { " FALL" } else { "" },
+            ));
+            if all {
+                println!("{}", lines.pop_back().unwrap_or_default());
+            }
+            if lines.len() > 23 {
+                lines.pop_front();
+            }
+        }
+        if fallen {
+            for l in lines.drain(..) {
+                println!("{l}");
+            }
+            println!();
+            physics.reset(&HumanoidPose::standing_on(
+                &scene.terrain,
+                target.x,
+                target.y,
+                0.0,
+            ))?;
+            policy.reset();
+            continue;
+        }
+        control_step(
+            physics.as_mut(),
+            &s,
+            path,
+            scene,
+            t,
+            policy,
+            &mut obs,
+            &mut action,
+        )?;
     }
     Ok(())
 }

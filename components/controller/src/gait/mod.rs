@@ -161,8 +161,11 @@ impl Policy for ModelBasedController {
                 got: obs.layout().len(),
             });
         }
-        // The plan's head height above the ground under the root, 0.5 s ahead.
-        let requested = obs.root_height + obs.head_pos[2] + obs.waypoints[0][2];
+        // The plan's head height above the ground under its own point, 0.5 s ahead:
+        // measured from the ground under the root, a crouch-walk down a slope or stairs
+        // asked for 0.8 m minus the descent ahead and went down on hands and knees.
+        let requested =
+            obs.root_height + obs.head_pos[2] + obs.waypoints[0][2] - obs.waypoint_ground[0];
         let p = self.crawl.params();
         let (below, above) = (p.crawl_below, p.stand_above);
         if requested >= below {
