@@ -13,9 +13,9 @@ mod timing;
 pub use component::{Component, ComponentError, Outcome};
 pub use messages::{
     ACTION_RESET, ACTION_TRACK, AgentAction, ControllerInput, ControllerOutput, HEIGHT_MAP_SAMPLES,
-    HumanoidState, MAX_AGENTS, MAX_BODIES, MAX_JOINTS, MAX_OBSTACLES, ObstacleSample,
-    PHYSICS_OBSERVE, PHYSICS_STEP, PLAN_WAYPOINT_DT, PLAN_WAYPOINTS, PhysicsInput, PhysicsOutput,
-    PlanMessage, PlanWaypoint, PlannerInput,
+    HumanoidState, MAX_AGENTS, MAX_BODIES, MAX_JOINTS, MAX_OBSTACLES, MESSAGE_LAYOUT_VERSION,
+    ObstacleSample, PHYSICS_OBSERVE, PHYSICS_STEP, PLAN_WAYPOINT_DT, PLAN_WAYPOINTS, PhysicsInput,
+    PhysicsOutput, PlanMessage, PlanWaypoint, PlannerInput, RESET_CRAWL, RESET_STAND, ResetPose,
 };
 pub use naming::{ComponentKind, RunId, ServiceNames};
 pub use timing::{CONTROL_DT, CONTROL_HZ, PHYSICS_DT, PHYSICS_HZ, PHYSICS_STEPS_PER_CONTROL, Tick};

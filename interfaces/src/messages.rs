@@ -115,9 +115,35 @@ impl Default for PhysicsOutput {
 
 /// [`AgentAction::command`]: drive the joints to `pd_targets` (and apply the wrench).
 pub const ACTION_TRACK: u32 = 1;
-/// [`AgentAction::command`]: put the humanoid back standing where it is, at rest (how
-/// the orchestrator recovers a fallen humanoid); targets are ignored.
+/// [`AgentAction::command`]: put the humanoid back at rest in the pose
+/// [`AgentAction::reset`] describes (how the orchestrator recovers a fallen humanoid);
+/// targets and wrench are ignored.
 pub const ACTION_RESET: u32 = 2;
+/// [`ResetPose::form`]: standing in the rest pose, feet on the ground.
+pub const RESET_STAND: u32 = 1;
+/// [`ResetPose::form`]: on hands and knees (head ~0.4 m), for a plan that crawls or
+/// a top overhead.
+pub const RESET_CRAWL: u32 = 2;
+
+/// Layout version of the messages: 2 added [`AgentAction::reset`] (the reset's
+/// place, heading and form; version 1 reset in place, standing). Both ends of an IPC
+/// link must agree; iceoryx2 refuses a service whose payload size differs.
+pub const MESSAGE_LAYOUT_VERSION: u32 = 2;
+
+/// Where and how an [`ACTION_RESET`] puts a humanoid back.
+#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
+#[repr(C)]
+#[type_name("plamo::ResetPose")]
+pub struct ResetPose {
+    /// Pelvis origin x, y \[m\]; physics puts the body on the terrain there.
+    pub position: [f64; 2],
+    /// Heading about +Z \[rad\] (0 faces +X).
+    pub yaw: f64,
+    /// [`RESET_STAND`] or [`RESET_CRAWL`]; 0 (a zeroed request) is refused.
+    pub form: u32,
+    /// Zero; keeps the layout free of padding.
+    pub reserved: u32,
+}
 /// [`PhysicsInput::mode`]: step nothing, report the world at its current tick (the
 /// orchestrator's first read). Zero, so a zeroed input can never move the world.
 pub const PHYSICS_OBSERVE: u32 = 0;
@@ -145,6 +171,8 @@ pub struct AgentAction {
     /// Residual root wrench, world frame: force \[N\] then torque \[N m\]; zeros when
     /// the policy uses none.
     pub root_wrench: [f64; 6],
+    /// With [`ACTION_RESET`]: the pose to put the humanoid back in (ignored otherwise).
+    pub reset: ResetPose,
 }
 
 impl Default for AgentAction {
@@ -157,6 +185,7 @@ impl Default for AgentAction {
             reserved: 0,
             pd_targets: [0.0; MAX_JOINTS],
             root_wrench: [0.0; 6],
+            reset: ResetPose::default(),
         }
     }
 }
@@ -272,5 +301,12 @@ mod tests {
             8 * (3 + 4 + 3 + 3 + 3) + 8 + 8 * 96 + 8 * 72 + 8
         );
         assert!(core::mem::size_of::<PhysicsOutput>() < 16 * 1024);
+        // Layout version 2 (MESSAGE_LAYOUT_VERSION): the reset pose ends the action.
+        assert_eq!(MESSAGE_LAYOUT_VERSION, 2);
+        assert_eq!(core::mem::size_of::<ResetPose>(), 32);
+        assert_eq!(
+            core::mem::size_of::<AgentAction>(),
+            8 + 4 * 4 + 8 * MAX_JOINTS + 8 * 6 + 32
+        );
     }
 }

@@ -11,9 +11,13 @@
 //!   world at its current tick: the orchestrator's first read, before tick 0's
 //!   control step. Mode [`PHYSICS_STEP`] applies the actions and steps.
 //! - An action with command [`ACTION_RESET`] ([`reset_request`]) puts that agent back
-//!   standing on the terrain at its current XY and heading, at rest, before the
-//!   steps (how the orchestrator recovers a fallen humanoid); [`ACTION_TRACK`]
-//!   drives the joints to its PD targets. Any other command is an error.
+//!   at rest before the steps, in the pose its [`ResetPose`] names: pelvis over the
+//!   given XY, the given heading, standing ([`RESET_STAND`]) or on hands and knees
+//!   ([`RESET_CRAWL`], [`HumanoidPose::crawling_on`]), resting on the terrain (how the
+//!   orchestrator recovers a fallen humanoid; it picks a place on the plan clear of
+//!   walls and tops). A non-finite or off-terrain place or an unknown form is an
+//!   error naming the field. [`ACTION_TRACK`] drives the joints to its PD targets.
+//!   Any other command is an error.
 //! - `fallen` in each reported state uses the most lenient posture (crawl): the head
 //!   is below 0.15 m above the ground or touches the terrain. Posture-aware fall
 //!   rules belong to whoever knows the requested posture (the orchestrator).
@@ -27,7 +31,8 @@
 use plamo_interfaces::{
     ACTION_RESET, ACTION_TRACK, AgentAction, Component, ComponentError, MAX_AGENTS, MAX_BODIES,
     MAX_JOINTS, MAX_OBSTACLES, ObstacleSample, Outcome, PHYSICS_OBSERVE, PHYSICS_STEP,
-    PHYSICS_STEPS_PER_CONTROL, PhysicsInput, PhysicsOutput, Tick,
+    PHYSICS_STEPS_PER_CONTROL, PhysicsInput, PhysicsOutput, RESET_CRAWL, RESET_STAND, ResetPose,
+    Tick,
 };
 use plamo_scenes::{ObstacleState, Scene};
 
@@ -56,14 +61,15 @@ pub struct PhysicsComponent {
     first_slot: usize,
 }
 
-/// An action asking physics to put `agent` back on its feet where it is (see the
-/// module docs).
-pub fn reset_request(tick: u64, agent: u32) -> AgentAction {
+/// An action asking physics to put `agent` back at rest in `pose` (see the module
+/// docs).
+pub fn reset_request(tick: u64, agent: u32, pose: ResetPose) -> AgentAction {
     AgentAction {
         tick,
         agent,
         joint_count: 0,
         command: ACTION_RESET,
+        reset: pose,
         ..AgentAction::default()
     }
 }
@@ -211,19 +217,49 @@ impl PhysicsComponent {
         Ok(())
     }
 
-    fn reset_in_place(&mut self, agent: usize) -> Result<(), PhysicsError> {
-        let s = self.backend.humanoid_state(agent)?;
-        let (x, y, yaw) = (s.root_position[0], s.root_position[1], s.heading());
-        let yaw = if yaw.is_finite() { yaw } else { 0.0 };
-        self.backend.reset_humanoid(
-            agent,
-            &HumanoidPose::standing_on(&self.scene.terrain, x, y, yaw),
-        )
+    fn reset_to(&mut self, agent: usize, r: &ResetPose) -> Result<(), ComponentError> {
+        let invalid = |field, reason: String| ComponentError::InvalidInput {
+            component: Self::NAME,
+            field,
+            reason: format!("agent {agent}: {reason}"),
+        };
+        let [x, y] = r.position;
+        if !(x.is_finite() && y.is_finite() && r.yaw.is_finite()) {
+            return Err(invalid(
+                "actions.reset",
+                format!("position ({x}, {y}) and yaw {} must be finite", r.yaw),
+            ));
+        }
+        if !self.scene.terrain.contains(x, y) {
+            let (lo, hi) = self.scene.terrain.bounds();
+            return Err(invalid(
+                "actions.reset.position",
+                format!(
+                    "({x:.3}, {y:.3}) is off the terrain (x {:.2}..{:.2}, y {:.2}..{:.2})",
+                    lo[0], hi[0], lo[1], hi[1]
+                ),
+            ));
+        }
+        let terrain = &self.scene.terrain;
+        let pose = match r.form {
+            RESET_STAND => HumanoidPose::standing_on(terrain, x, y, r.yaw),
+            RESET_CRAWL => HumanoidPose::crawling_on(terrain, x, y, r.yaw),
+            other => {
+                return Err(invalid(
+                    "actions.reset.form",
+                    format!(
+                        "form {other}; expected {RESET_STAND} (standing) or {RESET_CRAWL} \
+                         (hands and knees)"
+                    ),
+                ));
+            }
+        };
+        self.backend.reset_humanoid(agent, &pose).map_err(failed)
     }
 
     fn apply(&mut self, agent: usize, a: &AgentAction) -> Result<(), ComponentError> {
         match a.command {
-            ACTION_RESET => return self.reset_in_place(agent).map_err(failed),
+            ACTION_RESET => return self.reset_to(agent, &a.reset),
             ACTION_TRACK => {}
             other => {
                 return Err(ComponentError::InvalidInput {
@@ -231,7 +267,7 @@ impl PhysicsComponent {
                     field: "actions.command",
                     reason: format!(
                         "agent {agent}: command {other}; expected {ACTION_TRACK} (track the PD \
-                         targets) or {ACTION_RESET} (reset standing)"
+                         targets) or {ACTION_RESET} (reset into a pose)"
                     ),
                 });
             }
@@ -325,6 +361,7 @@ impl Component for PhysicsComponent {
 mod tests {
     use super::*;
     use plamo_scenes::HeightGrid;
+    use std::f64::consts::FRAC_PI_2;
 
     fn flat() -> Scene {
         Scene {
@@ -407,8 +444,82 @@ mod tests {
             p.step(Tick(4), &input, &mut out),
             Err(ComponentError::InvalidInput { .. })
         ));
-        input.actions[1] = reset_request(4, 1);
+        let stand = ResetPose {
+            position: [0.5, 1.0],
+            yaw: 0.0,
+            form: RESET_STAND,
+            reserved: 0,
+        };
+        input.actions[1] = reset_request(4, 1, stand);
         p.step(Tick(4), &input, &mut out).unwrap();
         assert_eq!(out.tick, 8);
+    }
+
+    #[test]
+    fn resets_put_the_humanoid_where_and_how_asked_and_refuse_bad_poses() {
+        let mut p = world(1);
+        let mut out = PhysicsOutput::default();
+        let mut input = PhysicsInput {
+            tick: 0,
+            agent_count: 1,
+            mode: PHYSICS_STEP,
+            ..Default::default()
+        };
+        let crawl = ResetPose {
+            position: [1.0, -0.5],
+            yaw: FRAC_PI_2,
+            form: RESET_CRAWL,
+            reserved: 0,
+        };
+        input.actions[0] = reset_request(0, 0, crawl);
+        p.step(Tick(0), &input, &mut out).unwrap();
+        let s = out.agents[0];
+        // On hands and knees over (1, -0.5), facing +Y: the head low and ahead in +Y.
+        assert!(
+            (s.root_position[0] - 1.0).abs() < 0.05,
+            "{:?}",
+            s.root_position
+        );
+        assert!(
+            (s.root_position[1] + 0.5).abs() < 0.05,
+            "{:?}",
+            s.root_position
+        );
+        assert!(
+            (0.2..0.6).contains(&s.head_position[2]),
+            "{:?}",
+            s.head_position
+        );
+        assert!(s.head_position[1] > s.root_position[1] + 0.2);
+        let bad = [
+            (ResetPose { form: 0, ..crawl }, "actions.reset.form"),
+            (
+                ResetPose {
+                    position: [f64::NAN, 0.0],
+                    ..crawl
+                },
+                "actions.reset",
+            ),
+            (
+                ResetPose {
+                    position: [40.0, 0.0],
+                    ..crawl
+                },
+                "actions.reset.position",
+            ),
+        ];
+        for (pose, field) in bad {
+            input.tick = out.tick;
+            input.actions[0] = reset_request(out.tick, 0, pose);
+            let err = p.step(Tick(out.tick), &input, &mut out).unwrap_err();
+            match err {
+                ComponentError::InvalidInput {
+                    field: f, reason, ..
+                } => {
+                    assert_eq!(f, field, "{reason}");
+                }
+                other => panic!("{other:?}"),
+            }
+        }
     }
 }

@@ -1,7 +1,30 @@
 //! Inputs (initial pose, root wrench) and outputs (humanoid state) of a backend, in
 //! world frame, Z up, metres, radians. Quaternions are `[w, x, y, z]`.
 
+use crate::humanoid::{BODIES, JOINTS, Shape};
 use crate::{NUM_BODIES, NUM_JOINTS, PhysicsError, humanoid, math};
+
+/// Pelvis pitch of the crawl pose \[rad\] (forward lean; the crawl gait's settled
+/// posture, recorded like [`CRAWL_JOINTS`]).
+pub const CRAWL_PITCH: f64 = 0.9;
+
+/// Joint angles of the crawl pose \[rad\], [`crate::JOINT_NAMES`] order: the crawl
+/// gait's posture on hands and knees (head ~0.4 m, pelvis ~0.46 m), the mean over
+/// 18 s of steady MuJoCo crawling on the playground's bench leg (seed 0), made
+/// left-right symmetric. A reset into it lands the body where the crawl gait holds
+/// it, so the gait carries on instead of getting down again.
+pub const CRAWL_JOINTS: [f64; NUM_JOINTS] = [
+    0.0, 0.889, 0.0, // spine x, y, z
+    0.0, 0.538, 0.0, // neck x, y, z
+    0.08, -1.227, 0.0, -1.565, // right shoulder x, y, z, elbow
+    -0.08, -1.227, 0.0, -1.565, // left shoulder x, y, z, elbow
+    -0.37, -1.52, 0.0, 2.175, 0.904, 0.0, // right hip x, y, z, knee, ankle y, x
+    0.37, -1.52, 0.0, 2.175, 0.904, 0.0, // left hip x, y, z, knee, ankle y, x
+];
+
+/// Gap between the lowest shape of a pose placed by [`HumanoidPose::resting_on`] and
+/// the terrain \[m\]: it drops onto the ground instead of starting in it.
+const REST_GAP: f64 = 0.01;
 
 /// Where and how a humanoid starts after `reset`.
 #[derive(Debug, Clone, PartialEq)]
@@ -10,8 +33,27 @@ pub struct HumanoidPose {
     pub root_position: [f64; 3],
     /// Heading: rotation about +Z \[rad\] (0 faces +X).
     pub yaw: f64,
+    /// Forward lean of the pelvis about its own Y axis, after the heading \[rad\]
+    /// (0 upright; the crawl pose leans [`CRAWL_PITCH`]).
+    pub pitch: f64,
     /// Joint angles \[rad\] in [`crate::JOINT_NAMES`] order; clamped into the limits.
     pub joints: [f64; NUM_JOINTS],
+}
+
+fn quat_mul(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+    let [aw, ax, ay, az] = a;
+    let [bw, bx, by, bz] = b;
+    [
+        aw * bw - ax * bx - ay * by - az * bz,
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+    ]
+}
+
+fn quat_axis(axis: [f64; 3], angle: f64) -> [f64; 4] {
+    let (s, c) = (0.5 * angle).sin_cos();
+    [c, axis[0] * s, axis[1] * s, axis[2] * s]
 }
 
 impl HumanoidPose {
@@ -20,8 +62,97 @@ impl HumanoidPose {
         Self {
             root_position: [x, y, ground_z + humanoid::STANDING_PELVIS_HEIGHT + 0.002],
             yaw,
+            pitch: 0.0,
             joints: [0.0; NUM_JOINTS],
         }
+    }
+
+    /// On hands and knees ([`CRAWL_JOINTS`], [`CRAWL_PITCH`]) with the pelvis origin
+    /// over (x, y), resting on the scene's terrain ([`Self::resting_on`]).
+    pub fn crawling_on(terrain: &plamo_scenes::HeightGrid, x: f64, y: f64, yaw: f64) -> Self {
+        Self::resting_on(terrain, x, y, yaw, CRAWL_PITCH, CRAWL_JOINTS)
+    }
+
+    /// A pose with its pelvis origin over (x, y), lowered until its lowest shape is
+    /// [`REST_GAP`] above the terrain under it (every shape's lowest point is checked
+    /// against the ground beneath that point, so no limb starts inside a slope or a
+    /// step).
+    pub fn resting_on(
+        terrain: &plamo_scenes::HeightGrid,
+        x: f64,
+        y: f64,
+        yaw: f64,
+        pitch: f64,
+        joints: [f64; NUM_JOINTS],
+    ) -> Self {
+        let mut pose = Self {
+            root_position: [x, y, 0.0],
+            yaw,
+            pitch,
+            joints,
+        };
+        let lift = pose
+            .lowest_points()
+            .iter()
+            .map(|p| terrain.height_at(p[0], p[1]) - p[2])
+            .fold(f64::NEG_INFINITY, f64::max);
+        pose.root_position[2] = lift + REST_GAP;
+        pose
+    }
+
+    /// Each shape's lowest point in the world for this pose (forward kinematics of
+    /// [`BODIES`] with the clamped joints; see [`crate::humanoid`] for how hinges
+    /// compose).
+    pub fn lowest_points(&self) -> Vec<[f64; 3]> {
+        let joints = self.clamped_joints();
+        let mut frames: Vec<([f64; 3], [f64; 4])> = Vec::with_capacity(NUM_BODIES);
+        let mut out = Vec::new();
+        for b in &BODIES {
+            let (p, mut q) = match b.parent {
+                None => (self.root_position, self.root_quat()),
+                Some(parent) => {
+                    let (pp, pq) = frames[parent];
+                    (math::transform(pp, pq, b.offset), pq)
+                }
+            };
+            for &j in b.joints {
+                q = quat_mul(q, quat_axis(JOINTS[j].axis.unit(), joints[j]));
+            }
+            frames.push((p, q));
+            for shape in b.shapes {
+                let low = match *shape {
+                    Shape::Capsule { from, to, radius } => {
+                        let (a, c) = (math::transform(p, q, from), math::transform(p, q, to));
+                        let e = if a[2] < c[2] { a } else { c };
+                        [e[0], e[1], e[2] - radius]
+                    }
+                    Shape::Sphere { center, radius } => {
+                        let c = math::transform(p, q, center);
+                        [c[0], c[1], c[2] - radius]
+                    }
+                    Shape::Box {
+                        center,
+                        half_extents: h,
+                    } => {
+                        let corners = (0..8).map(|k| {
+                            let sign = |bit: usize| if k & bit == 0 { -1.0 } else { 1.0 };
+                            math::transform(
+                                p,
+                                q,
+                                [
+                                    center[0] + sign(1) * h[0],
+                                    center[1] + sign(2) * h[1],
+                                    center[2] + sign(4) * h[2],
+                                ],
+                            )
+                        });
+                        corners.min_by(|a, c| a[2].total_cmp(&c[2])).unwrap_or(p)
+                    }
+                };
+                out.push(low);
+            }
+        }
+        out
     }
 
     /// Standing on the scene's terrain at (x, y): the ground height is the highest
@@ -40,12 +171,19 @@ impl HumanoidPose {
     pub fn validate(&self) -> Result<(), PhysicsError> {
         check_finite("pose.root_position", &self.root_position)?;
         check_finite("pose.yaw", &[self.yaw])?;
+        check_finite("pose.pitch", &[self.pitch])?;
         check_finite("pose.joints", &self.joints)
     }
 
-    /// Root quaternion `[w, x, y, z]`.
+    /// Root quaternion `[w, x, y, z]`: the heading, then the pitch about the
+    /// turned Y axis.
     pub fn root_quat(&self) -> [f64; 4] {
-        math::quat_from_yaw(self.yaw)
+        let yaw = math::quat_from_yaw(self.yaw);
+        if self.pitch == 0.0 {
+            // Bit-identical to the heading alone, as before poses could lean.
+            return yaw;
+        }
+        quat_mul(yaw, quat_axis([0.0, 1.0, 0.0], self.pitch))
     }
 
     /// Joint angles clamped into their limits.
@@ -242,6 +380,29 @@ pub(crate) fn sanitize_action(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn resting_poses_touch_the_ground_with_their_lowest_shapes() {
+        let flat = plamo_scenes::HeightGrid::flat([-3.0, -3.0], [6.0, 6.0], 0.1, 0.2);
+        // The rest pose resting on flat ground is the standing pose (feet on it).
+        let rest = HumanoidPose::resting_on(&flat, 0.5, 0.5, 0.3, 0.0, [0.0; NUM_JOINTS]);
+        let stand = HumanoidPose::standing(0.5, 0.5, 0.2, 0.3);
+        assert!((rest.root_position[2] - stand.root_position[2]).abs() < 0.01);
+        // The crawl pose: pelvis about 0.46 m up, knees and hands on the ground.
+        let crawl = HumanoidPose::crawling_on(&flat, 0.0, 0.0, 0.0);
+        let pelvis = crawl.root_position[2] - 0.2;
+        assert!((0.38..0.55).contains(&pelvis), "pelvis {pelvis}");
+        let low = crawl.lowest_points();
+        let lowest = low.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
+        assert!((lowest - 0.2 - REST_GAP).abs() < 1e-9, "{lowest}");
+        let touching: Vec<_> = low.iter().filter(|p| p[2] < 0.2 + 0.06).collect();
+        assert!(touching.len() >= 4, "{touching:?}");
+        // Hands ahead of the pelvis, knees near under it.
+        assert!(low.iter().any(|p| p[0] > 0.4 && p[2] < 0.27), "{low:?}");
+        // Leaning forward: the quaternion turns +X downwards.
+        let fwd = math::rotate(crawl.root_quat(), [1.0, 0.0, 0.0]);
+        assert!(fwd[2] < -0.7, "{fwd:?}");
+    }
 
     #[test]
     fn blow_ups_are_unphysical_even_when_finite() {

@@ -16,6 +16,7 @@ mod error;
 pub mod external;
 mod link;
 mod plan;
+mod recover;
 mod sense;
 
 use std::time::{Duration, Instant};
@@ -76,7 +77,9 @@ pub struct Lockstep {
     plans: Vec<PlanMessage>,
     input: PhysicsInput,
     fallen: Vec<bool>,
-    /// The fall rule's verdicts at `judged_tick` (before the low-top reset exception).
+    /// Each agent's falls at one spot, for where its next reset goes.
+    recovery: Vec<recover::Recovery>,
+    /// The fall rule's verdicts at `judged_tick`.
     fell: Vec<bool>,
     judged_tick: Option<u64>,
     trackers: Vec<AgentTracker>,
@@ -127,6 +130,7 @@ impl Lockstep {
             plans: vec![PlanMessage::default(); agents],
             input: PhysicsInput::default(),
             fallen: vec![false; agents],
+            recovery: vec![recover::Recovery::default(); agents],
             fell: vec![false; agents],
             judged_tick: None,
             trackers: instruction_counts
@@ -161,7 +165,7 @@ impl Lockstep {
                 &self.input.actions[k],
             );
             self.fell[k] = fell;
-            self.fallen[k] = fell && AgentTracker::may_reset(&self.scene, &self.world.agents[k]);
+            self.fallen[k] = fell;
         }
         self.judged_tick = Some(tick);
         if self.trackers.iter().all(AgentTracker::done) {
@@ -173,7 +177,11 @@ impl Lockstep {
             tick,
             &self.world,
             &self.plans,
-            &self.fallen,
+            control::Fallen {
+                flags: &self.fallen,
+                scene: &self.scene,
+                recovery: &mut self.recovery,
+            },
             &mut self.input,
         )?;
         self.times.controllers.push(secs(t1));

@@ -63,10 +63,6 @@ struct Track {
 /// the get-down and get-up take 1.5 s each.
 const TOP_GRACE: f64 = 2.0;
 
-/// Horizontal distance from a low top within which a fallen humanoid is not reset
-/// standing \[m\] (a standing body reaches ~0.3 m from its root).
-const RESET_CLEARANCE: f64 = 0.4;
-
 fn residual(a: &AgentAction) -> Option<RootWrench> {
     let w = a.root_wrench;
     (w != [0.0; 6]).then_some(RootWrench {
@@ -141,18 +137,6 @@ impl AgentTracker {
             .min(w[2] - scene.height_at(w[0], w[1]))
             .min(headroom);
         self.settings.is_fallen(above, requested) || !above.is_finite()
-    }
-
-    /// Whether physics may stand the fallen humanoid up where it is: not under or
-    /// beside a top lower than a standing body, where a reset would put the body inside
-    /// the top (it then stays stuck there); such a humanoid carries on from the ground.
-    pub(crate) fn may_reset(scene: &Scene, s: &HumanoidState) -> bool {
-        let r = s.root_position;
-        let ground = scene.height_at(r[0], r[1]);
-        !scene.tops.iter().any(|t| {
-            t.footprint.signed_distance(r[0], r[1]) < RESET_CLEARANCE
-                && t.z_bottom - ground < plamo_physics::humanoid::STANDING_HEAD_HEIGHT + 0.1
-        })
     }
 
     /// Record the step at `tick` with this tick's plan and the action applied during
@@ -248,7 +232,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn low_tops_cap_the_fall_height_and_block_the_standing_reset() {
+    fn low_tops_cap_the_fall_height() {
         let scene = plamo_scenes::builtin("playground").unwrap();
         let tracker = AgentTracker::new(1, ControllerSettings::default());
         let mut plan = PlanMessage {
@@ -267,7 +251,6 @@ mod tests {
             s.head_position = [x + 0.4, y, 0.35];
             plan.waypoints[0].position = [x + 1.0, y, 1.47];
             assert_eq!(tracker.is_fallen(&scene, &s, &plan), !under, "({x}, {y})");
-            assert_eq!(AgentTracker::may_reset(&scene, &s), !under, "({x}, {y})");
         }
         // Under the tunnel a head on the ground is still a fall.
         s.root_position = [9.5, 20.4, 0.2];
