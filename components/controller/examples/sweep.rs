@@ -56,20 +56,44 @@ fn main() -> Result<(), Box<dyn Error>> {
         Some(p) => GaitParams::load(std::path::Path::new(&p))?,
         None => GaitParams::default(),
     };
-    if let Some(r) = std::env::var_os("PLAMO_TRACE") {
-        let r: usize = r.to_string_lossy().parse()?;
-        let speed = speeds[0];
+    // Flat ground for a path of `length` m: an arc's 5 m circle reaches 10 m sideways,
+    // the edge of `flat_scene` (a run past the half circle walked off it and counted
+    // a fall).
+    let ground = |length: f64| {
+        let mut scene = flat_scene(length + 10.0);
+        if arc {
+            scene.terrain = plamo_scenes::HeightGrid::flat([-15.0, -15.0], [30.0, 30.0], 0.1, 0.0);
+        }
+        scene
+    };
+    // Run r's path at `speed`: an arc, or a straight line from rest like the tuner's
+    // and Table 2's paths.
+    let make_path = |r: usize, speed: f64| -> Box<dyn HeadPath> {
         let start = staggered_start(strip_start, r);
-        let path = RampedPath {
-            line: StraightPath {
+        if arc {
+            Box::new(ArcPath {
                 start,
                 speed,
                 head_height: head,
-            },
-            accel: START_ACCEL,
-        };
+                straight: 3.0,
+                radius: if r.is_multiple_of(2) { 5.0 } else { -5.0 },
+            })
+        } else {
+            Box::new(RampedPath {
+                line: StraightPath {
+                    start,
+                    speed,
+                    head_height: head,
+                },
+                accel: START_ACCEL,
+            })
+        }
+    };
+    if let Some(r) = std::env::var_os("PLAMO_TRACE") {
+        let r: usize = r.to_string_lossy().parse()?;
+        let speed = speeds[0];
         let (scene, duration) = if terrain == "flat" {
-            (flat_scene(speed * duration + 10.0), duration)
+            (ground(speed * duration), duration)
         } else {
             (
                 strip.clone(),
@@ -77,7 +101,15 @@ fn main() -> Result<(), Box<dyn Error>> {
             )
         };
         let mut policy = ModelBasedController::with_params(params, settings.clone())?;
-        return trace(engines[0], &scene, &path, duration, &mut policy, &settings);
+        let path = make_path(r, speed);
+        return trace(
+            engines[0],
+            &scene,
+            path.as_ref(),
+            duration,
+            &mut policy,
+            &settings,
+        );
     }
     for &engine in &engines {
         for &speed in &speeds {
@@ -86,9 +118,8 @@ fn main() -> Result<(), Box<dyn Error>> {
                 .map(|r| {
                     let mut policy =
                         ModelBasedController::with_params(params, settings.clone()).unwrap();
-                    let start = staggered_start(strip_start, r);
                     let (scene, duration) = if terrain == "flat" {
-                        (flat_scene(speed * duration + 10.0), duration)
+                        (ground(speed * duration), duration)
                     } else {
                         // A strip is 30 m long from its start.
                         (
@@ -96,25 +127,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                             duration.min((STRIP_LENGTH - RUN_STAGGER * r as f64) / speed),
                         )
                     };
-                    let path: Box<dyn HeadPath> = if arc {
-                        Box::new(ArcPath {
-                            start,
-                            speed,
-                            head_height: head,
-                            straight: 3.0,
-                            radius: if r % 2 == 0 { 5.0 } else { -5.0 },
-                        })
-                    } else {
-                        // From rest, like the tuner's and Table 2's paths.
-                        Box::new(RampedPath {
-                            line: StraightPath {
-                                start,
-                                speed,
-                                head_height: head,
-                            },
-                            accel: START_ACCEL,
-                        })
-                    };
+                    let path = make_path(r, speed);
                     run_path(
                         engine,
                         &scene,
@@ -176,7 +189,7 @@ fn trace(
     // PLAMO_TRACE_ALL=1: every line, not only those before a fall.
     let all = std::env::var_os("PLAMO_TRACE_ALL").is_some();
     println!(
-        "t, x pelvis, ground, slope, pelvis h, pitch, vx, vz, head h, lag, foot R (dx, h), foot L (dx, h), knees, contact"
+        "t, x pelvis, ground, slope, pelvis h, pitch, vx, vz, head h, lag, heading err, foot R (dx, h), foot L (dx, h), knees, contact"
     );
     for c in 0..(duration * 30.0) as usize {
         let t = c as f64 / 30.0;
@@ -192,9 +205,9 @@ fn trace(
             format!("({:5.2},{:5.2})", p[0] - px, p[2] - g(p[0], p[1]))
         };
         let knee = |n: &str| s.joint_pos[plamo_physics::humanoid::joint_index(n).unwrap()];
-        if c % 2 == 0 {
+        if c.is_multiple_of(2) || fallen {
             lines.push_back(format!(
-                "{t:6.2}{} {px:6.2} {ground:5.2} {:5.2} {:5.2} {:5.2} {:5.2} {:5.2} {head_h:5.2} {:5.2} {} {} {:5.2},{:5.2} {}{}",
+                "{t:6.2}{} {px:6.2} {ground:5.2} {:5.2} {:5.2} {:5.2} {:5.2} {:5.2} {head_h:5.2} {:5.2} {:5.2} {} {} {:5.2},{:5.2} {}{}",
                 if policy.is_crawling() { "c" } else { " " },
                 (g(px + 0.4, py) - g(px - 0.4, py)) / 0.8,
                 pz - ground,
@@ -202,6 +215,12 @@ fn trace(
                 s.root_linvel[0],
                 s.root_linvel[2],
                 target.x - s.head[0],
+                {
+                    let d = path.direction(t);
+                    let e = d[1].atan2(d[0]) - s.heading();
+                    (e + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
+                        - std::f64::consts::PI
+                },
                 foot(0),
                 foot(1),
                 knee("right_knee"),

@@ -1,6 +1,7 @@
 //! Closed loop in MuJoCo: the default model-based controller walks a straight path at
 //! 1.0-2.0 m/s, crouch-walks at 1 and 2 m/s and walks an arc on flat ground without
-//! falling and tracks the head path, and walks up and down stairs. Straight paths start
+//! falling and tracks the head path, walks up and down stairs, and crouch-walks up and
+//! down the slope and stairs strips. Straight paths start
 //! from rest at [`START_ACCEL`], as in tuning and `plamo eval locomotion`.
 #![cfg(feature = "mujoco")]
 
@@ -120,26 +121,24 @@ fn crouch_walk_at_1_and_2_m_per_s_does_not_fall_in_mujoco() {
     }
 }
 
-/// Walks `plamo eval locomotion`'s stairs strip (flights of 0.12 m x 0.4 m steps up and
-/// down) from rest at 1 and 1.5 m/s, from four starts each, for 20 s: up to 30 m, over
-/// one to two and a half flights. The runs are the sweep example's
-/// (`sweep mujoco 1,1.5 1.47 20 4 straight stairs`).
-#[test]
-fn walk_climbs_and_descends_stairs_in_mujoco() {
+/// Runs from rest at each of `speeds` with the head at `head` \[m\] along `plamo eval
+/// locomotion`'s `terrain` strip, from `starts` staggered starts each, for up to 20 s
+/// (the sweep example's runs: `sweep mujoco SPEEDS HEAD 20 STARTS straight TERRAIN`).
+fn strip_runs(terrain: &str, head: f64, speeds: &[f64], starts: usize) -> Vec<MetricsSummary> {
     let settings = ControllerSettings {
         body_mass: plamo_physics::humanoid::total_mass(),
         ..Default::default()
     };
-    let (scene, start) = terrain_scene("stairs").unwrap();
+    let (scene, start) = terrain_scene(terrain).unwrap();
     let mut runs = Vec::new();
-    for speed in [1.0, 1.5] {
-        for r in 0..4 {
+    for &speed in speeds {
+        for r in 0..starts {
             let mut policy = ModelBasedController::new(settings.clone()).unwrap();
             let path = RampedPath {
                 line: StraightPath {
                     start: staggered_start(start, r),
                     speed,
-                    head_height: 1.47,
+                    head_height: head,
                 },
                 accel: START_ACCEL,
             };
@@ -154,17 +153,47 @@ fn walk_climbs_and_descends_stairs_in_mujoco() {
             )
             .unwrap();
             eprintln!(
-                "{speed} m/s, start {r}: {}",
+                "{terrain} head {head} m, {speed} m/s, start {r}: {}",
                 MetricsSummary::sweep_row(std::slice::from_ref(&m))
             );
             assert!(m.residual_force_peak <= settings.residual_force_cap + 1e-9);
             runs.push(m);
         }
     }
-    let falls: u32 = runs.iter().map(|m| m.falls).sum();
+    runs
+}
+
+/// Falls summed and mean XY error over `runs`.
+fn falls_and_xy(runs: &[MetricsSummary]) -> (u32, f64) {
+    let falls = runs.iter().map(|m| m.falls).sum();
     let xy = runs.iter().map(|m| m.xy_err_mean).sum::<f64>() / runs.len() as f64;
+    (falls, xy)
+}
+
+/// Walks the stairs strip (flights of 0.12 m x 0.4 m steps up and down) at 1 and
+/// 1.5 m/s from four starts each: up to 30 m, over one to two and a half flights.
+#[test]
+fn walk_climbs_and_descends_stairs_in_mujoco() {
+    let (falls, xy) = falls_and_xy(&strip_runs("stairs", 1.47, &[1.0, 1.5], 4));
     // Measured 2 falls and a mean XY error of 0.10 m; the gait before the terrain-aware
     // footholds fell 49 times, 0.27 m.
     assert!(falls <= 10, "{falls} falls on the stairs");
     assert!(xy < 0.2, "mean xy error {xy} on the stairs");
+}
+
+/// Crouch-walks (head 0.8 m) up and down the slope strip and the stairs strip at 1 and
+/// 2 m/s (Table 2's speed), four starts each.
+#[test]
+fn crouch_walk_climbs_and_descends_slope_and_stairs_in_mujoco() {
+    let (falls, xy) = falls_and_xy(&strip_runs("slope", 0.8, &[1.0, 2.0], 4));
+    // Measured 0 falls, XY 0.08 m; the crouch section before its terrain tuning 2 falls,
+    // 0.12 m, and before that, when a crouch down the slope went down for a crawl, 3
+    // falls, 0.90 m.
+    assert!(falls <= 1, "{falls} crouch falls on the slope");
+    assert!(xy < 0.15, "mean crouch xy error {xy} on the slope");
+    let (falls, xy) = falls_and_xy(&strip_runs("stairs", 0.8, &[1.0, 2.0], 4));
+    // Measured 8 falls (6 of them at 2 m/s), XY 0.17 m; before the terrain tuning 15
+    // falls, 0.28 m; before the crawl switch's fix 22 falls, 1.15 m.
+    assert!(falls <= 11, "{falls} crouch falls on the stairs");
+    assert!(xy < 0.22, "mean crouch xy error {xy} on the stairs");
 }
