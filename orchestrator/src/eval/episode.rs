@@ -9,9 +9,12 @@
 
 use plamo_controller::ControllerSettings;
 use plamo_physics::BackendKind;
-use plamo_planner::{FLAG_INFEASIBLE, FLAG_REPLANNED, Planner, PlannerComponent, PlannerSettings};
+use plamo_planner::{
+    FLAG_INFEASIBLE, FLAG_REPLANNED, Locomotion, Planner, PlannerComponent, PlannerSettings,
+};
 use plamo_scenes::{ObstacleShape, Scene};
 
+use super::ground::{GroundKind, ground_kind};
 use crate::lockstep::{InProcess, Links, Lockstep, RunError, StepStatus};
 use crate::spec::RunSpec;
 
@@ -81,6 +84,36 @@ pub struct Episode {
     pub planned_time: f64,
     /// Head XY every [`TRACK_DT`] seconds.
     pub track: Vec<[f64; 2]>,
+    /// Where each fall happened, in order (as many as [`Episode::falls`]).
+    pub fall_sites: Vec<FallSite>,
+}
+
+/// Where a fall happened: the form the instruction asked for and the ground under
+/// the root when the fall rule first judged the humanoid fallen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FallSite {
+    /// The instruction's locomotion.
+    pub locomotion: Locomotion,
+    /// The ground there.
+    pub ground: GroundKind,
+}
+
+/// A locomotion's instruction verb ("crouch-walk"), as the experiments write it.
+pub fn verb(l: Locomotion) -> &'static str {
+    match l {
+        Locomotion::Crawl => "crawl",
+        Locomotion::CrouchWalk => "crouch-walk",
+        Locomotion::Walk => "walk",
+        Locomotion::Run => "run",
+        Locomotion::Sprint => "sprint",
+    }
+}
+
+impl FallSite {
+    /// `verb@ground` ("crawl@rough").
+    pub fn field(&self) -> String {
+        format!("{}@{}", verb(self.locomotion), self.ground.name())
+    }
 }
 
 impl Episode {
@@ -102,6 +135,15 @@ impl Episode {
         self.track
             .iter()
             .map(|p| format!("{:.2}:{:.2}", p[0], p[1]))
+            .collect::<Vec<_>>()
+            .join(";")
+    }
+
+    /// The fall sites as `verb@ground;...`, a CSV-safe field.
+    pub fn fall_sites_field(&self) -> String {
+        self.fall_sites
+            .iter()
+            .map(FallSite::field)
             .collect::<Vec<_>>()
             .join(";")
     }
@@ -201,6 +243,11 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
         }
     };
     ep.instructions = planner.instructions().len();
+    let forms: Vec<Locomotion> = planner
+        .instructions()
+        .iter()
+        .map(|i| i.locomotion)
+        .collect();
     ep.planned_length = planner.route().iter().map(|t| t.length()).sum();
     ep.planned_time = planner.route().last().map_or(0.0, |t| t.end_time());
     let max_seconds = spec
@@ -227,8 +274,22 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
     )?;
     let mut touching = vec![false; scene.dynamic.len()];
     let mut next_track = 0.0;
+    let mut falls_so_far = 0;
     let status = loop {
-        let status = match ls.step() {
+        let root = ls.world().agents[0].root_position;
+        let stepped = ls.step();
+        // A site for each fall the run's own count gained (the count is kept per
+        // instruction: a fall across an instruction's end counts in both).
+        let falls: u32 = ls.report()[0].iter().map(|r| r.metrics.falls).sum();
+        let i = (ls.plans()[0].instruction as usize).min(forms.len().saturating_sub(1));
+        for _ in falls_so_far..falls {
+            ep.fall_sites.push(FallSite {
+                locomotion: forms.get(i).copied().unwrap_or(Locomotion::Walk),
+                ground: ground_kind(&scene.terrain, root[0], root[1]),
+            });
+        }
+        falls_so_far = falls;
+        let status = match stepped {
             Ok(s) => s,
             Err(e @ RunError::Component { .. }) => {
                 ep.run_error = Some(e.to_string());
@@ -279,4 +340,40 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
         ep.z_err /= steps as f64;
     }
     Ok(ep)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every fall the run counts gets a site, in the form the instruction asked for,
+    /// on the ground it happened on: rapier's run over a flight of stairs falls.
+    #[test]
+    fn falls_get_their_sites() {
+        let scene = plamo_scenes::builtin("terrain-stairs").expect("built-in scene");
+        let ep = run_episode(&EpisodeSpec {
+            scene: &scene,
+            instructions: "Run from the start to the goal".into(),
+            backend: BackendKind::Rapier,
+            seed: 0,
+            planner: PlannerSettings::default(),
+            max_seconds: Some(8.0),
+        })
+        .expect("episode");
+        assert!(ep.falls > 0, "no fall to attribute: pick a harder ground");
+        assert_eq!(
+            ep.fall_sites.len(),
+            ep.falls as usize,
+            "{:?}",
+            ep.fall_sites
+        );
+        for s in &ep.fall_sites {
+            assert_eq!(s.locomotion, Locomotion::Run);
+        }
+        assert!(
+            ep.fall_sites.iter().any(|s| s.ground == GroundKind::Stairs),
+            "{}",
+            ep.fall_sites_field()
+        );
+    }
 }

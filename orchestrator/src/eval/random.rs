@@ -7,6 +7,7 @@
 //! component error, a fall, a collision (a wall, ceiling or moving obstacle touched
 //! and the tour not finished), else a timeout.
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use anyhow::bail;
@@ -16,6 +17,7 @@ use plotters::style::RGBColor;
 use serde::{Deserialize, Serialize};
 
 use super::episode::{EpisodeSpec, run_episode};
+use super::ground::GroundKind;
 use super::plot::{Bar, bars};
 use super::table::field;
 use super::{Experiment, Meta, RunOptions, Table, command_line, mean, wilson};
@@ -83,7 +85,64 @@ pub fn tour(scene: &Scene, scene_seed: u64) -> anyhow::Result<String> {
         .map_or(String::new(), |f| f.to_uppercase().chain(c).collect()))
 }
 
-const COLUMNS: [&str; 19] = [
+/// Where the tours fell: for each form (rows) and kind of ground (columns), the
+/// tours with a fall there and, in brackets, their falls (a humanoid that falls
+/// again and again at one spot counts once among the tours).
+fn fall_table(runs: &Table) -> anyhow::Result<String> {
+    let grounds = GroundKind::ALL;
+    let mut tours = BTreeMap::<(&str, GroundKind), (usize, usize)>::new();
+    // The tour's four forms, and a sprint where merged rows came from elsewhere.
+    let known = [FORMS[0], FORMS[1], FORMS[2], FORMS[3], "sprint"];
+    for r in 0..runs.rows.len() {
+        let mut seen = BTreeSet::new();
+        for site in runs
+            .str(r, "fall_sites")?
+            .split(';')
+            .filter(|s| !s.is_empty())
+        {
+            let (form, ground) = site
+                .split_once('@')
+                .ok_or_else(|| anyhow::anyhow!("row {r}: fall site `{site}` is not form@ground"))?;
+            let ground = grounds
+                .into_iter()
+                .find(|g| g.name() == ground)
+                .ok_or_else(|| anyhow::anyhow!("row {r}: unknown ground `{ground}`"))?;
+            let form = known.into_iter().find(|f| *f == form).ok_or_else(|| {
+                anyhow::anyhow!("row {r}: unknown form `{form}` (expected one of {known:?})")
+            })?;
+            let e = tours.entry((form, ground)).or_default();
+            e.1 += 1;
+            if seen.insert((form, ground)) {
+                e.0 += 1;
+            }
+        }
+    }
+    let mut md = String::from(
+        "Where the tours fell: tours with a fall in that form on that ground (falls in \
+         brackets); the ground is judged from the height map under the root \
+         (`eval::ground`).\n\n| form |",
+    );
+    for g in grounds {
+        md.push_str(&format!(" {} |", g.name()));
+    }
+    md.push_str("\n|---|");
+    md.push_str(&"---|".repeat(grounds.len()));
+    md.push('\n');
+    let shown = known
+        .into_iter()
+        .filter(|f| FORMS.contains(f) || tours.keys().any(|(k, _)| k == f));
+    for f in shown {
+        md.push_str(&format!("| {f} |"));
+        for g in grounds {
+            let (t, n) = tours.get(&(f, g)).copied().unwrap_or_default();
+            md.push_str(&format!(" {t} ({n}) |"));
+        }
+        md.push('\n');
+    }
+    Ok(md)
+}
+
+const COLUMNS: [&str; 20] = [
     "job",
     "scene_seed",
     "instructions",
@@ -102,6 +161,7 @@ const COLUMNS: [&str; 19] = [
     "planned_length",
     "planned_time",
     "replans",
+    "fall_sites",
     "error",
 ];
 
@@ -176,6 +236,7 @@ impl Experiment for RandomScenes {
             ep.planned_length.to_string(),
             ep.planned_time.to_string(),
             ep.replans.to_string(),
+            ep.fall_sites_field(),
             field(
                 ep.planning_error
                     .as_deref()
@@ -248,12 +309,13 @@ impl Experiment for RandomScenes {
              Causes are assigned in this order: planning (no route at the start, or the \
              planner flagged the rest infeasible), error (a component failed), fall, collision \
              (a wall, ceiling or moving obstacle touched and the tour unfinished), timeout.\n\n\
-             ![outcomes](random.png)\n",
+             ![outcomes](random.png)\n\n{}",
             mean(&plen),
             mean(&ptime),
             mean(&reached),
             mean(&xy),
             mean(&z),
+            fall_table(runs)?,
         ));
         let mut csv = Table {
             header: ["outcome", "runs", "share", "wilson95_low", "wilson95_high"]
