@@ -1,7 +1,8 @@
 //! Where a fallen humanoid is put back (the reset request of the control phase).
 //!
 //! A reset goes **on the plan**: where the humanoid lies if that is within
-//! [`ON_PLAN`] of its plan and clear, else the nearest point of the plan's waypoint
+//! [`ON_PLAN`] of its plan (or of the plan's line behind its first waypoint: a body
+//! that lags is on its plan) and clear, else the nearest point of the plan's waypoint
 //! polyline (the next 5 s) whose place is clear, searching ahead along the plan,
 //! then back. **Clear** means the body's footprint in that form keeps
 //! [`WALL_MARGIN`] from every wall, stays on the terrain, and fits under every top
@@ -104,7 +105,10 @@ impl Polyline {
         self.s[self.s.len() - 1]
     }
 
-    /// Arc length of the point nearest to `p`, and its distance \[m\].
+    /// Arc length of the point nearest to `p`, and its distance \[m\]. The first
+    /// segment reaches back without end: the waypoints start 0.5 s ahead of the
+    /// plan's "now", and a body that lags on the plan's line is on the plan (its arc
+    /// length is then negative).
     fn nearest(&self, p: [f64; 2]) -> (f64, f64) {
         let mut best = (0.0, dist(p, [self.points[0][0], self.points[0][1]]));
         for i in 0..self.points.len() - 1 {
@@ -112,7 +116,8 @@ impl Polyline {
             let d = [b[0] - a[0], b[1] - a[1]];
             let len2 = d[0] * d[0] + d[1] * d[1];
             let t = if len2 > 0.0 {
-                (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / len2).clamp(0.0, 1.0)
+                let t = ((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / len2;
+                t.clamp(if i == 0 { f64::NEG_INFINITY } else { 0.0 }, 1.0)
             } else {
                 0.0
             };
@@ -248,13 +253,13 @@ impl Recovery {
             reserved: 0,
         };
         if self.repeats == 0 && off < ON_PLAN {
-            let (_, h, dir) = line.at(near);
+            let (_, h, dir) = line.at(near.max(0.0));
             let yaw = dir.unwrap_or(own);
             if let Some(p) = place(scene, root, h, yaw, true) {
                 return pose(p, yaw);
             }
         }
-        let start = (near + ADVANCE * self.repeats as f64).min(line.length());
+        let start = (near.max(0.0) + ADVANCE * self.repeats as f64).min(line.length());
         let steps = (line.length() / SEARCH_STEP).ceil() as usize + 1;
         let ahead = (0..steps).map(|k| start + k as f64 * SEARCH_STEP);
         let back = (1..steps).map(|k| start - k as f64 * SEARCH_STEP);
@@ -272,7 +277,7 @@ impl Recovery {
         // lies, on the terrain, in the plan's form.
         let (lo, hi) = scene.terrain.bounds();
         let xy = [root[0].clamp(lo[0], hi[0]), root[1].clamp(lo[1], hi[1])];
-        let (_, h, dir) = line.at(near);
+        let (_, h, dir) = line.at(near.max(0.0));
         let form = if Posture::for_head_height(h) == Posture::Crawl
             || scene
                 .headroom_at(xy[0], xy[1])
@@ -283,5 +288,157 @@ impl Recovery {
             RESET_STAND
         };
         pose((form, xy), dir.unwrap_or(own))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plamo_interfaces::PlanWaypoint;
+    use std::f64::consts::FRAC_PI_2;
+
+    /// Flat 20 x 10 m ground at z 0.3, a wall along y 5.2..5.5 from x 2 to 18, and a
+    /// 0.6 m top over x 12..16.
+    fn scene() -> Scene {
+        plamo_scenes::from_toml_str(
+            r#"
+name = "recover"
+description = ""
+[terrain]
+size = [20.0, 10.0]
+[[terrain.tiles]]
+generator = { kind = "flat", height = 0.3 }
+[[walls]]
+name = "wall"
+center = [10.0, 5.35]
+size = [16.0, 0.3]
+height = 2.0
+[[tops]]
+name = "top"
+center = [14.0, 2.0]
+size = [4.0, 3.0]
+clearance = 0.6
+thickness = 0.2
+[[landmarks]]
+name = "a"
+region = { kind = "circle", center = [1.0, 2.0], radius = 0.5 }
+"#,
+            "recover test",
+        )
+        .unwrap()
+    }
+
+    /// A plan along +X at `y` from `x0`, 0.5 m apart, head `h` above the ground.
+    fn plan(x0: f64, y: f64, h: f64) -> PlanMessage {
+        let mut p = PlanMessage {
+            form_height: h,
+            ..Default::default()
+        };
+        for (i, w) in p.waypoints.iter_mut().enumerate() {
+            *w = PlanWaypoint {
+                position: [x0 + 0.5 * i as f64, y, 0.3 + h],
+                speed: 1.0,
+            };
+        }
+        p
+    }
+
+    fn lying(x: f64, y: f64, yaw: f64) -> HumanoidState {
+        let mut s = HumanoidState::default();
+        s.root_position = [x, y, 0.45];
+        s.root_orientation = [0.0, 0.0, (0.5 * yaw).sin(), (0.5 * yaw).cos()];
+        s
+    }
+
+    #[test]
+    fn a_clear_fall_on_the_plan_resets_where_it_lies_facing_along_the_plan() {
+        let scene = scene();
+        let mut r = Recovery::default();
+        // Lagging 1 m behind the plan's first waypoint on its line, facing sideways.
+        let p = r.reset_pose(&scene, &lying(5.0, 2.1, 1.5), &plan(6.0, 2.0, 1.47));
+        assert_eq!((p.form, p.position), (RESET_STAND, [5.0, 2.1]));
+        assert!(p.yaw.abs() < 1e-9, "{}", p.yaw);
+        // The plan crawls there: on hands and knees.
+        let mut r = Recovery::default();
+        let p = r.reset_pose(&scene, &lying(5.0, 2.1, 0.0), &plan(6.0, 2.0, 0.4));
+        assert_eq!((p.form, p.position), (RESET_CRAWL, [5.0, 2.1]));
+    }
+
+    #[test]
+    fn a_fall_against_a_wall_resets_on_the_plan_clear_of_it() {
+        let scene = scene();
+        let mut r = Recovery::default();
+        // Fell sideways against the wall, 0.8 m off a plan that keeps 0.7 m from it.
+        let s = lying(6.0, 5.0, 0.0);
+        let p = r.reset_pose(&scene, &s, &plan(6.0, 4.3, 1.47));
+        assert_eq!(p.form, RESET_STAND);
+        assert!((p.position[1] - 4.3).abs() < 1e-9, "{:?}", p.position);
+        assert!(clear(
+            &scene,
+            p.position[0],
+            p.position[1],
+            p.yaw,
+            RESET_STAND
+        ));
+        assert!(!clear(&scene, 6.0, 5.0, 0.0, RESET_STAND));
+        // A crawl's longer body keeps clear too: facing along the wall it fits where a
+        // crawl across the wall's line would not.
+        assert!(clear(&scene, 6.0, 4.6, 0.0, RESET_CRAWL));
+        assert!(!clear(&scene, 6.0, 4.6, FRAC_PI_2, RESET_CRAWL));
+    }
+
+    #[test]
+    fn a_top_overhead_resets_on_hands_and_knees_even_on_a_standing_plan() {
+        let scene = scene();
+        let mut r = Recovery::default();
+        // Under the 0.6 m top with a plan whose height already rose to standing.
+        let p = r.reset_pose(&scene, &lying(14.0, 2.0, 0.0), &plan(14.2, 2.0, 1.47));
+        assert_eq!(p.form, RESET_CRAWL);
+        assert!(clear(
+            &scene,
+            p.position[0],
+            p.position[1],
+            p.yaw,
+            RESET_CRAWL
+        ));
+        assert!(!clear(&scene, 14.0, 2.0, 0.0, RESET_STAND));
+    }
+
+    #[test]
+    fn repeated_falls_at_one_spot_move_the_reset_along_the_plan() {
+        let scene = scene();
+        let mut r = Recovery::default();
+        let pl = plan(3.0, 2.0, 1.47);
+        let mut xs = vec![];
+        for _ in 0..4 {
+            // It keeps falling at x 3.2, each time 0.4 m past its last reset at most.
+            xs.push(r.reset_pose(&scene, &lying(3.2, 2.0, 0.0), &pl).position[0]);
+        }
+        assert_eq!(xs[0], 3.2);
+        for (k, x) in xs.iter().enumerate().skip(1) {
+            assert!((x - (3.2 + ADVANCE * k as f64)).abs() < 1e-9, "{xs:?}");
+        }
+        // A fall elsewhere begins a new series: where it lies again.
+        let far = 3.2 + SAME_SPOT + 0.1;
+        let p = r.reset_pose(&scene, &lying(far, 2.0, 0.0), &plan(far, 2.0, 1.47));
+        assert_eq!(p.position[0], far);
+    }
+
+    #[test]
+    fn the_same_fall_gives_the_same_reset() {
+        let scene = scene();
+        let s = lying(6.3, 4.9, 0.4);
+        let pl = plan(6.0, 4.3, 0.4);
+        let a = Recovery::default().reset_pose(&scene, &s, &pl);
+        let b = Recovery::default().reset_pose(&scene, &s, &pl);
+        assert_eq!(a, b);
+        let bits = |p: &ResetPose| {
+            [
+                p.position[0].to_bits(),
+                p.position[1].to_bits(),
+                p.yaw.to_bits(),
+            ]
+        };
+        assert_eq!(bits(&a), bits(&b));
     }
 }

@@ -1,0 +1,218 @@
+//! Fall recovery (the control phase's reset request, `lockstep::recover`): a humanoid
+//! that falls under a 0.6 m ceiling is put back on hands and knees under it and crawls
+//! on instead of falling again and again, and the reset (which crosses iceoryx2 as
+//! `AgentAction::reset`) gives the same run in-process and as separate processes.
+//!
+//! The fall is forced: the physics link is wrapped so that, once, the reported head
+//! drops to the ground; the orchestrator's fall rule then sends a real reset request to
+//! the real physics, which is what is tested.
+
+use std::io::Write;
+
+use plamo::ipc::IpcSettings;
+use plamo::lockstep::{Link, Links, Lockstep, RunError, StepStatus};
+use plamo::processes::ProcessRun;
+use plamo::spec::RunSpec;
+use plamo_controller::ControllerSettings;
+use plamo_interfaces::{ACTION_RESET, PhysicsInput, PhysicsOutput, RESET_CRAWL, RunId};
+use plamo_physics::BackendKind;
+
+/// Flat ground, a 0.6 m ceiling over x 4..10, and a crawl under it.
+const TUNNEL: &str = r#"
+name = "fall-tunnel"
+description = "a crawl under a low ceiling (fall recovery test)"
+
+[terrain]
+size = [16.0, 6.0]
+
+[[tops]]
+name = "ceiling"
+center = [7.0, 3.0]
+size = [6.0, 3.0]
+clearance = 0.6
+thickness = 0.2
+
+[[landmarks]]
+name = "start"
+region = { kind = "circle", center = [2.0, 3.0], radius = 0.5 }
+
+[[landmarks]]
+name = "end"
+region = { kind = "circle", center = [14.0, 3.0], radius = 0.5 }
+"#;
+
+const CRAWL: &str = "Crawl from the start to the end";
+
+/// The physics link, except that once the humanoid's root has passed `x`, the
+/// reported head lies on the ground (a fall).
+struct FallAt {
+    inner: Box<dyn Link<PhysicsInput, PhysicsOutput>>,
+    x: f64,
+    /// The tick of the forced fall, once it happened.
+    forced: Option<u64>,
+}
+
+impl Link<PhysicsInput, PhysicsOutput> for FallAt {
+    fn name(&self) -> &str {
+        self.inner.name()
+    }
+    fn call(&mut self, tick: u64, input: &PhysicsInput) -> Result<PhysicsOutput, RunError> {
+        let mut out = self.inner.call(tick, input)?;
+        if self.forced.is_none() && out.agents[0].root_position[0] > self.x {
+            out.agents[0].head_position[2] = 0.05;
+            self.forced = Some(out.tick);
+        }
+        Ok(out)
+    }
+    fn shutdown(&mut self) {
+        self.inner.shutdown();
+    }
+}
+
+fn scene_file(name: &str) -> tempfile::NamedTempFile {
+    let mut f = tempfile::Builder::new()
+        .prefix(&format!("plamo-fall-{name}-"))
+        .suffix(".toml")
+        .tempfile()
+        .unwrap();
+    f.write_all(TUNNEL.as_bytes()).unwrap();
+    f
+}
+
+fn spec(scene: &std::path::Path, backend: BackendKind) -> RunSpec {
+    RunSpec {
+        scene: scene.display().to_string(),
+        instructions: vec![CRAWL.into()],
+        backend,
+        seed: 1,
+        params: Default::default(),
+    }
+}
+
+/// What a run with one forced fall under the ceiling did.
+struct Outcome {
+    digest: u64,
+    /// (tick, form, x, y) of every reset request.
+    resets: Vec<(u64, u32, f64, f64)>,
+    /// Fall-rule verdicts after the forced one.
+    later_falls: usize,
+    /// Highest head above the ground from the reset on, while under the ceiling \[m\].
+    max_head_under: f64,
+    /// Root x at the forced fall and at the end \[m\].
+    x_fall: f64,
+    x_end: f64,
+}
+
+fn drive(links: Links, spec: &RunSpec, fall_x: f64, seconds: f64) -> (Outcome, Links) {
+    let scene = spec.load_scene().unwrap();
+    let links = Links {
+        physics: Box::new(FallAt {
+            inner: links.physics,
+            x: fall_x,
+            forced: None,
+        }),
+        ..links
+    };
+    let mut ls =
+        Lockstep::start(links, scene, &[1], &ControllerSettings::default(), seconds).unwrap();
+    let mut out = Outcome {
+        digest: 0,
+        resets: vec![],
+        later_falls: 0,
+        max_head_under: 0.0,
+        x_fall: f64::NAN,
+        x_end: f64::NAN,
+    };
+    let mut fell_at = None;
+    while ls.step().unwrap() == StepStatus::Running {
+        let a = ls.input().actions[0];
+        if a.command == ACTION_RESET {
+            let [x, y] = a.reset.position;
+            out.resets.push((a.tick, a.reset.form, x, y));
+            if fell_at.is_none() {
+                fell_at = Some(a.tick);
+                out.x_fall = ls.world().agents[0].root_position[0];
+            }
+        }
+        let tick = ls.tick().0;
+        if fell_at.is_some() {
+            let s = &ls.world().agents[0];
+            if (4.5..9.5).contains(&s.root_position[0]) {
+                out.max_head_under = out.max_head_under.max(s.head_position[2]);
+            }
+            // The reset's own tick is judged at the next step; count later ones.
+            if ls.fall_verdicts(tick)[0] && a.command != ACTION_RESET {
+                out.later_falls += 1;
+            }
+            out.x_end = s.root_position[0];
+        }
+    }
+    out.digest = ls.digest().value();
+    eprintln!(
+        "fell at tick {fell_at:?} x {:.2}, end x {:.2} at tick {}, resets {:?}, later falls {}, head under {:.2}",
+        out.x_fall,
+        out.x_end,
+        ls.tick().0,
+        out.resets,
+        out.later_falls,
+        out.max_head_under
+    );
+    (out, ls.into_links())
+}
+
+fn backend() -> BackendKind {
+    if cfg!(feature = "mujoco") {
+        BackendKind::Mujoco
+    } else {
+        BackendKind::Rapier
+    }
+}
+
+#[test]
+fn a_fall_under_a_low_ceiling_is_reset_on_hands_and_knees_and_crawls_on() {
+    let file = scene_file("crawl");
+    let spec = spec(file.path(), backend());
+    let scene = spec.load_scene().unwrap();
+    let links = spec.in_process(&scene).unwrap();
+    let (o, _) = drive(links, &spec, 5.0, 16.0);
+    // One reset, on hands and knees, under the ceiling, near where it fell.
+    assert_eq!(o.resets.len(), 1, "{:?}", o.resets);
+    let (_, form, x, y) = o.resets[0];
+    assert_eq!(form, RESET_CRAWL);
+    assert!(
+        (4.0..10.0).contains(&x) && (y - 3.0).abs() < 1.0,
+        "({x}, {y})"
+    );
+    assert!(
+        (x - o.x_fall).abs() < 1.0,
+        "reset at {x}, fell at {}",
+        o.x_fall
+    );
+    // It stays down under the ceiling (a standing reset would put the head through
+    // it) and crawls on without falling again.
+    assert!(o.max_head_under < 0.6, "head up to {}", o.max_head_under);
+    assert_eq!(o.later_falls, 0);
+    assert!(o.x_end > o.x_fall + 0.5, "from {} to {}", o.x_fall, o.x_end);
+}
+
+#[test]
+fn a_reset_gives_the_same_run_in_process_and_as_processes() {
+    let file = scene_file("ipc");
+    let spec = spec(file.path(), BackendKind::Rapier);
+    let scene = spec.load_scene().unwrap();
+    // Fall early, a crawl's length before the ceiling, and run on for a few seconds.
+    let (a, _) = drive(spec.in_process(&scene).unwrap(), &spec, 3.0, 9.0);
+    let run = RunId::new("fall-recovery-ipc").unwrap();
+    let exe = std::path::Path::new(env!("CARGO_BIN_EXE_plamo"));
+    let (procs, links) = ProcessRun::start(&spec, &run, exe, IpcSettings::default(), None).unwrap();
+    let (b, links) = drive(links, &spec, 3.0, 9.0);
+    let errors = procs.finish(Some(links));
+    assert!(errors.is_empty(), "{errors:?}");
+    assert_eq!(a.resets.len(), 1, "{:?}", a.resets);
+    assert_eq!(a.resets[0].1, RESET_CRAWL);
+    assert_eq!(
+        a.resets.iter().map(|r| r.0).collect::<Vec<_>>(),
+        b.resets.iter().map(|r| r.0).collect::<Vec<_>>()
+    );
+    assert_eq!(a.digest, b.digest);
+}
