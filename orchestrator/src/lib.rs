@@ -8,6 +8,7 @@ pub mod fmu_package;
 pub mod ipc;
 pub mod lockstep;
 pub mod processes;
+pub mod progress;
 pub mod record;
 pub mod seeds;
 pub mod spec;

@@ -12,12 +12,12 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use clap::{Args, Subcommand};
-use indicatif::{ProgressBar, ProgressStyle};
 use plamo::eval::dynamic::Dynamic;
 use plamo::eval::pyramid::{self, Pyramid};
 use plamo::eval::random::RandomScenes;
 use plamo::eval::slalom::{self, QpConfig, Slalom};
 use plamo::eval::{self, Experiment, RunOptions, Shard};
+use plamo::progress::Progress;
 use plamo::viz::{FAMILY, ensure_registered};
 use plamo_controller::{
     ControllerSettings, GaitParams, MetricsSummary, ModelBasedController, RUN_STAGGER, RampedPath,
@@ -263,11 +263,12 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
     let jobs: Vec<(usize, usize, usize)> = (0..TERRAINS.len())
         .flat_map(|t| (0..FORMS.len()).flat_map(move |f| (0..a.runs).map(move |r| (t, f, r))))
         .collect();
-    let bar = ProgressBar::new(jobs.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} runs [{elapsed} < {eta}]")
-            .context("progress template")?,
-    );
+    let bar = Progress::new(
+        jobs.len() as u64,
+        "locomotion",
+        "{bar:30} {pos}/{len} runs [{elapsed} < {eta}]",
+        false,
+    )?;
     let results: Vec<anyhow::Result<MetricsSummary>> = jobs
         .par_iter()
         .map(|&(t, f, r)| {

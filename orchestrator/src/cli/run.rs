@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
+use plamo::progress::Progress;
 use plamo_interfaces::RunId;
 use plamo_physics::BackendKind;
 use serde::Serialize;
@@ -398,15 +398,13 @@ fn drive(
     let mut ls = Lockstep::start(links, scene.clone(), counts, &controller, max_seconds)
         .map_err(|e| Box::new((e, None)))?;
     let io = |e: std::io::Error| plamo::lockstep::RunError::Setup(format!("recording: {e}"));
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new((max_seconds * 30.0).ceil() as u64)
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{bar:30} {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let bar = Progress::new(
+        (max_seconds * 30.0).ceil() as u64,
+        "control steps",
+        "{bar:30} {msg}",
+        args.quiet,
+    )
+    .map_err(|e| Box::new((plamo::lockstep::RunError::Setup(e.to_string()), None)))?;
     let start = Instant::now();
     let mut late = 0u64;
     macro_rules! bail {

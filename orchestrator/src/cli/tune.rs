@@ -100,7 +100,8 @@ pub fn run(args: TuneArgs) -> anyhow::Result<ExitCode> {
             .context("progress template")?,
     );
     // A bar is drawn only on a terminal; a tune run from a script or a cluster job (15
-    // minutes and more) logs one line per generation instead.
+    // minutes and more) logs one line per generation instead (every generation, not
+    // every tenth as `plamo::progress` does: each is minutes of work).
     let log_lines = !std::io::stderr().is_terminal();
     let (best, cost) = tune(&base, &settings, |g| {
         let line = format!(

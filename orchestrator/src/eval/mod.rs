@@ -21,12 +21,13 @@ pub mod table;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
-use indicatif::{ProgressBar, ProgressStyle};
 use plamo_physics::BackendKind;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 pub use table::Table;
+
+use crate::progress::Progress;
 
 /// One part of a sweep split across machines: jobs `j` with `j % count == index - 1`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -121,20 +122,6 @@ pub trait Experiment: Sync {
     fn params(&self) -> serde_json::Value;
 }
 
-fn progress(n: usize, quiet: bool, what: &str) -> anyhow::Result<ProgressBar> {
-    if quiet {
-        return Ok(ProgressBar::hidden());
-    }
-    let bar = ProgressBar::new(n as u64);
-    bar.set_style(
-        ProgressStyle::with_template(&format!(
-            "{what} {{bar:30}} {{pos}}/{{len}} runs [{{elapsed}} < {{eta}}]"
-        ))
-        .context("progress template")?,
-    );
-    Ok(bar)
-}
-
 /// Run experiment `e` (the shard of it `opts` asks for) and write its folder.
 /// Returns the markdown summary, or a note when only a shard was run.
 pub fn run<E: Experiment>(e: &E, opts: &RunOptions) -> anyhow::Result<String> {
@@ -152,7 +139,15 @@ pub fn run<E: Experiment>(e: &E, opts: &RunOptions) -> anyhow::Result<String> {
     }
     let jobs = e.jobs()?;
     let mine: Vec<usize> = (0..jobs.len()).filter(|&j| opts.shard.owns(j)).collect();
-    let bar = progress(mine.len(), opts.quiet, E::NAME)?;
+    let bar = Progress::new(
+        mine.len() as u64,
+        E::NAME,
+        &format!(
+            "{} {{bar:30}} {{pos}}/{{len}} runs [{{elapsed}} < {{eta}}]",
+            E::NAME
+        ),
+        opts.quiet,
+    )?;
     let work = || -> Vec<anyhow::Result<Vec<String>>> {
         mine.par_iter()
             .map(|&j| {
