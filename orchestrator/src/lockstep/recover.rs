@@ -344,10 +344,11 @@ region = { kind = "circle", center = [1.0, 2.0], radius = 0.5 }
     }
 
     fn lying(x: f64, y: f64, yaw: f64) -> HumanoidState {
-        let mut s = HumanoidState::default();
-        s.root_position = [x, y, 0.45];
-        s.root_orientation = [0.0, 0.0, (0.5 * yaw).sin(), (0.5 * yaw).cos()];
-        s
+        HumanoidState {
+            root_position: [x, y, 0.45],
+            root_orientation: [0.0, 0.0, (0.5 * yaw).sin(), (0.5 * yaw).cos()],
+            ..Default::default()
+        }
     }
 
     #[test]
