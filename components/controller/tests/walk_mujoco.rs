@@ -106,7 +106,7 @@ fn crouch_walk_at_1_and_2_m_per_s_does_not_fall_in_mujoco() {
     for speed in [1.0, 2.0] {
         let (m, _) = straight(speed, 0.8);
         assert_eq!(m.falls, 0, "fell crouch-walking at {speed} m/s");
-        // Measured XY 0.10-0.16 m, Z 0.09-0.10 m (paper Table 2, crouch-walk at 2 m/s on
+        // Measured XY 0.08-0.10 m, Z 0.10 m (paper Table 2, crouch-walk at 2 m/s on
         // flat: 0.20 / 0.03 m).
         assert!(
             m.xy_err_mean < 0.2,
