@@ -7,10 +7,10 @@
 //! no collider) followed by the body's own link, so child = parent * offset * R1 *
 //! R2 * R3 exactly as in MuJoCo. A body without hinges (the hands) is a fixed link.
 //!
-//! PD goes through rapier's implicit joint springs: stiffness `kp` with the rest
-//! position at the target, damping `kd + JOINT_DAMPING` on the DoF, armature on every
-//! hinge. The torque limit is applied to the spring term by moving its rest position
-//! to at most `max_torque / kp` from the current angle, refreshed every step.
+//! PD goes through rapier's implicit joint springs and DoF damping, refreshed every
+//! step so that the servo torque, damping included, is clamped to `max_torque` as
+//! MuJoCo's `forcerange` clamps its position servo (see
+//! [`RapierHumanoid::apply_controls`]); armature on every hinge.
 
 use rapier3d::prelude::*;
 
@@ -166,7 +166,6 @@ impl RapierHumanoid {
         for ji in 0..NUM_JOINTS {
             let (_, dof) = joint_links[ji];
             disp[dof] = joints[ji] as f32;
-            mb.damping_mut()[dof] = (JOINTS[ji].kd + JOINT_DAMPING) as f32;
             mb.armature_mut()[dof] = ARMATURE as f32;
         }
         mb.apply_displacements(&disp);
@@ -200,20 +199,46 @@ impl RapierHumanoid {
         world.remove_body(self.bodies[0]);
     }
 
-    /// Refresh spring rest positions (torque-limited PD) and the root wrench.
+    /// Refresh the servo springs (torque-limited PD) and the root wrench.
+    ///
+    /// MuJoCo's position servo applies `clamp(kp (q* - q) - kd q', +-max_torque)` with
+    /// `kd` implicit; rapier's spring is `-kp (q - rest) - kp dt q'+` (backward Euler)
+    /// and the DoF damping is implicit too. Unsaturated: rest = q*, damping
+    /// `kd - kp dt + JOINT_DAMPING`, the same discrete servo as MuJoCo's implicitfast.
+    /// Saturated: the spring is made to push exactly `+-max_torque` (its rest sits
+    /// `max_torque / kp` away, plus `dt q'` to cancel its own velocity term) and only the
+    /// passive damping remains, as MuJoCo clamps the servo's damping with its spring.
+    /// Clamping only the spring (as before) left `(kd + kp dt) q'` unclamped: a
+    /// shoulder reached half MuJoCo's angle after 83 ms of a 2 rad step
+    /// (`saturated_joint_step_responses_agree_across_backends`).
     pub fn apply_controls(&mut self, world: &mut PhysicsWorld) {
+        let dt = world.integration_parameters.dt as f64;
         let idx = self.multibody_index(world);
         let mb = world
             .multibody_joints
             .get_multibody_mut(idx)
             .expect("multibody");
+        let mut vel = [0.0f64; NUM_JOINTS];
+        for (ji, v) in vel.iter_mut().enumerate() {
+            *v = mb.generalized_velocity()[self.joint_links[ji].1] as f64;
+        }
         for (ji, jd) in JOINTS.iter().enumerate() {
-            let (link_id, _) = self.joint_links[ji];
+            let (link_id, dof) = self.joint_links[ji];
             let axis = 3 + jd.axis.index();
+            let v = vel[ji];
+            let q = mb.link(link_id).expect("link").joint.coords()[axis] as f64;
+            let servo = jd.kp * (self.targets[ji] - q) - jd.kd * v;
+            let (rest, damping) = if servo.abs() <= jd.max_torque {
+                (
+                    self.targets[ji],
+                    (jd.kd - jd.kp * dt).max(0.0) + JOINT_DAMPING,
+                )
+            } else {
+                let torque = jd.max_torque.copysign(servo);
+                (q + torque / jd.kp + dt * v, JOINT_DAMPING)
+            };
+            mb.damping_mut()[dof] = damping as f32;
             let link = mb.link_mut(link_id).expect("link");
-            let q = link.joint.coords()[axis] as f64;
-            let reach = jd.max_torque / jd.kp;
-            let rest = q + (self.targets[ji] - q).clamp(-reach, reach);
             link.joint.set_spring(axis, jd.kp as f32, rest as f32);
         }
         let root = &mut world.bodies[self.bodies[0]];
