@@ -23,6 +23,11 @@ pub struct ControllerSettings {
     /// Head height above the terrain below which the humanoid has fallen whatever
     /// was requested \[m\]. Default 0.2.
     pub fall_min_head_height: f64,
+    /// Fastest rise of the height the fall rule holds a head to \[m/s\]: where the
+    /// plan asks for a taller form (a crouch-walk's or a crawl's leg ends and a walk
+    /// begins) the body needs time to stand up, so the bar rises no faster than the
+    /// biped raises its head. Lower requests apply at once. Default 0.5.
+    pub fall_rise_rate: f64,
 }
 
 impl Default for ControllerSettings {
@@ -33,6 +38,7 @@ impl Default for ControllerSettings {
             residual_torque_cap: 60.0,
             fall_height_drift: 0.5,
             fall_min_head_height: 0.2,
+            fall_rise_rate: 0.5,
         }
     }
 }
@@ -79,6 +85,11 @@ impl ControllerSettings {
             self.fall_min_head_height.is_finite() && self.fall_min_head_height >= 0.0,
             "fall_min_head_height",
             "must be >= 0 m",
+        )?;
+        check(
+            self.fall_rise_rate.is_finite() && self.fall_rise_rate > 0.0,
+            "fall_rise_rate",
+            "must be > 0 m/s",
         )
     }
 

@@ -12,7 +12,7 @@ use plamo_controller::{
     StepSample,
 };
 use plamo_interfaces::{
-    AgentAction, CONTROL_HZ, HumanoidState, PLAN_WAYPOINT_DT, PlanMessage, Tick,
+    AgentAction, CONTROL_DT, CONTROL_HZ, HumanoidState, PLAN_WAYPOINT_DT, PlanMessage, Tick,
 };
 use plamo_physics::HEAD;
 use plamo_planner::FLAG_FINISHED;
@@ -50,6 +50,9 @@ pub(crate) struct AgentTracker {
     steps: usize,
     done: bool,
     last_xy_error: f64,
+    /// The requested head height the fall rule held the head to at the last judged
+    /// step \[m\] (it rises at most at `fall_rise_rate`).
+    fall_bar: f64,
 }
 
 struct Track {
@@ -100,6 +103,7 @@ impl AgentTracker {
             steps: 0,
             done: false,
             last_xy_error: 0.0,
+            fall_bar: f64::INFINITY,
         }
     }
 
@@ -115,6 +119,12 @@ impl AgentTracker {
 
     /// Whether the humanoid has fallen for the posture `plan` asks for.
     pub(crate) fn is_fallen(&self, scene: &Scene, s: &HumanoidState, plan: &PlanMessage) -> bool {
+        let (fallen, _) = self.judge(scene, s, plan);
+        fallen
+    }
+
+    /// The fall verdict, and the requested height it held the head to.
+    fn judge(&self, scene: &Scene, s: &HumanoidState, plan: &PlanMessage) -> (bool, f64) {
         let h = s.head_position;
         let above = h[2] - scene.height_at(h[0], h[1]);
         // The plan lowers the head below its form's height under low tops (a run leg
@@ -132,11 +142,17 @@ impl AgentTracker {
             .filter(|t| t.footprint.signed_distance(r[0], r[1]) < TOP_GRACE)
             .map(|t| t.z_bottom - ground)
             .fold(f64::INFINITY, f64::min);
+        // A taller form is asked for at once where a leg ends; the body stands up at
+        // a bounded rate, and so does the bar.
         let requested = plan
             .form_height
             .min(w[2] - scene.height_at(w[0], w[1]))
-            .min(headroom);
-        self.settings.is_fallen(above, requested) || !above.is_finite()
+            .min(headroom)
+            .min(self.fall_bar + self.settings.fall_rise_rate * CONTROL_DT);
+        (
+            self.settings.is_fallen(above, requested) || !above.is_finite(),
+            requested,
+        )
     }
 
     /// Record the step at `tick` with this tick's plan and the action applied during
@@ -150,7 +166,8 @@ impl AgentTracker {
         last_action: &AgentAction,
     ) -> bool {
         let t = tick.seconds();
-        let fallen = self.is_fallen(scene, s, plan);
+        let (fallen, bar) = self.judge(scene, s, plan);
+        self.fall_bar = bar;
         if self.done {
             return fallen;
         }
@@ -256,5 +273,57 @@ mod tests {
         s.root_position = [9.5, 20.4, 0.2];
         s.head_position = [9.9, 20.4, 0.1];
         assert!(tracker.is_fallen(&scene, &s, &plan));
+    }
+
+    /// A crouch-walk leg ends and a walk begins: the plan asks for 1.47 m at once, the
+    /// body rises at the biped's rate and is not fallen on the way; a body that stays
+    /// crouched is fallen once the bar has had time to rise (1.3 s to 1.3 m); a crawl asked for after
+    /// a walk lowers the bar at once.
+    #[test]
+    fn the_fall_bar_rises_at_a_bodys_pace() {
+        let scene = plamo_scenes::builtin("playground").unwrap();
+        let settings = ControllerSettings::default();
+        let mut tracker = AgentTracker::new(2, settings.clone());
+        let ([x, y], ground) = ([4.0, 11.0], scene.height_at(4.0, 11.0));
+        let plan_at = |h: f64, k: u64| {
+            let mut p = PlanMessage {
+                tick: k * 4,
+                instruction_count: 2,
+                form_height: h,
+                ..Default::default()
+            };
+            p.waypoints[0].position = [x + 1.0, y, ground + h];
+            p
+        };
+        let mut s = HumanoidState::default();
+        let mut judge = |tracker: &mut AgentTracker, head: f64, h: f64, k: u64| {
+            s.root_position = [x, y, ground + 0.6];
+            s.head_position = [x + 0.2, y, ground + head];
+            let a = AgentAction::default();
+            tracker.observe(&scene, Tick(k * 4), &s, &plan_at(h, k), &a)
+        };
+        let mut k = 0;
+        for _ in 0..30 {
+            assert!(!judge(&mut tracker, 0.8, 0.8, k));
+            k += 1;
+        }
+        // Rising from 0.8 m at 0.5 m/s: never below the bar.
+        let rise_steps = ((1.47 - 0.8) / (settings.fall_rise_rate * CONTROL_DT)).ceil() as u64;
+        for i in 0..=rise_steps {
+            let head = (0.8 + settings.fall_rise_rate * CONTROL_DT * i as f64).min(1.47);
+            assert!(!judge(&mut tracker, head, 1.47, k), "rising, step {i}");
+            k += 1;
+        }
+        // Staying crouched under a walk's plan is a fall once the bar has risen.
+        let mut tracker = AgentTracker::new(2, settings.clone());
+        let verdicts: Vec<bool> = (0..90)
+            .map(|i| judge(&mut tracker, 0.8, if i < 30 { 0.8 } else { 1.47 }, i))
+            .collect();
+        assert!(!verdicts[30], "fallen the moment the walk began");
+        assert!(verdicts[89], "a crouched body 2 s into a walk is fallen");
+        // A lower request applies at once: a standing head is not fallen, a head at
+        // 0.15 m is.
+        assert!(!judge(&mut tracker, 1.47, 0.4, 90));
+        assert!(judge(&mut tracker, 0.15, 0.4, 91));
     }
 }
