@@ -251,6 +251,24 @@ impl Planner {
             t0 = tr.end_time();
             out.push(tr);
         }
+        // The legs meet at their landmarks no faster than the corner there allows:
+        // re-time each leg between the junction speeds on either side of it.
+        let junctions: Vec<f64> = out
+            .windows(2)
+            .map(|w| junction_speed(&self.settings, &w[0].points, &w[1].points))
+            .collect();
+        let mut t0 = 0.0;
+        for (i, tr) in out.iter_mut().enumerate() {
+            let mut pts = std::mem::take(&mut tr.points);
+            let v0 = match i {
+                0 => pts.first().map_or(0.0, |p| p.v),
+                _ => junctions[i - 1],
+            };
+            let b_end = junctions.get(i).map(|v| v * v);
+            set_speeds(&self.settings, &mut pts, v0, b_end)?;
+            *tr = Trajectory::new(t0, pts);
+            t0 = tr.end_time();
+        }
         Ok(out)
     }
 
@@ -420,7 +438,13 @@ impl Planner {
             limits: &limits,
         };
         let mut pts = refine(&ctx, form, &path, Some(from));
-        set_speeds(&self.settings, &mut pts, v0, None)?;
+        // Towards the next leg's start as the route planned it (none while the route
+        // itself is being planned: `plan_route` re-times the legs at the end).
+        let b_end = self
+            .route
+            .get(index + 1)
+            .map(|next| junction_speed(&self.settings, &pts, &next.points).powi(2));
+        set_speeds(&self.settings, &mut pts, v0, b_end)?;
         Ok(Trajectory::new(t0, pts))
     }
 
@@ -767,6 +791,51 @@ impl Planner {
             replanned,
         }
     }
+}
+
+/// The fastest the body may pass from the end of leg `a` into leg `b` \[m/s\]:
+/// the corner between their directions taken as a bend of `corner_length`, the
+/// form change if one happens there, and both legs' own caps.
+pub(crate) fn junction_speed(s: &PlannerSettings, a: &[PathPoint], b: &[PathPoint]) -> f64 {
+    let (Some(end), Some(start)) = (a.last(), b.first()) else {
+        return 0.0;
+    };
+    let mut v = end.v_cap.min(start.v_cap);
+    // Directions over a corner's length on either side (a shorter leg: all of it).
+    let before = a
+        .iter()
+        .rev()
+        .find(|p| end.s - p.s >= s.corner_length)
+        .or(a.first())
+        .unwrap_or(end);
+    let after = b
+        .iter()
+        .find(|p| p.s - start.s >= s.corner_length)
+        .or(b.last())
+        .unwrap_or(start);
+    let d_in = [end.x - before.x, end.y - before.y];
+    let d_out = [after.x - start.x, after.y - start.y];
+    let (n_in, n_out) = (d_in[0].hypot(d_in[1]), d_out[0].hypot(d_out[1]));
+    if n_in > 1e-6 && n_out > 1e-6 {
+        let cos = ((d_in[0] * d_out[0] + d_in[1] * d_out[1]) / (n_in * n_out)).clamp(-1.0, 1.0);
+        let angle = cos.acos();
+        if angle > 1e-3 {
+            let curvature = angle / s.corner_length;
+            v = v.min((s.a_lat / curvature).sqrt());
+            let crawl = end.head_height.min(start.head_height) < s.crawl_switch_height;
+            if crawl {
+                v = v.min(s.crawl_turn_rate / curvature);
+            }
+        }
+    }
+    let crosses = |h0: f64, h1: f64| {
+        (h0 >= s.crawl_switch_height && h1 < s.crawl_switch_height)
+            || (h0 <= s.stand_switch_height && h1 > s.stand_switch_height)
+    };
+    if crosses(end.head_height, start.head_height) {
+        v = v.min(s.form_change_speed);
+    }
+    v
 }
 
 fn end_speed(t: &Trajectory) -> f64 {

@@ -59,6 +59,14 @@ pub struct PlannerSettings {
     pub form_change_speed: f64,
     /// Path length over which `form_change_speed` holds \[m\]. Default 0.5.
     pub form_change_length: f64,
+    /// Path length over which the body takes the corner where one leg ends at its
+    /// landmark and the next begins (not in the paper) \[m\]. Each leg's path is
+    /// smoothed on its own, so a landmark is a cusp of the route: a tour that turns
+    /// back at a landmark asked for a U-turn at full speed. The corner is taken as a
+    /// bend of this length, so the legs meet at no more than sqrt(a_lat * length /
+    /// angle) (a crawl: `crawl_turn_rate` * length / angle), and at
+    /// `form_change_speed` where the form changes there. Default 0.5.
+    pub corner_length: f64,
     /// Fastest turn of a crawl, heading change per second (not in the paper)
     /// \[rad/s\]: with the head below `crawl_switch_height` the speed is capped at
     /// this over the path's curvature. The lateral limit `a_lat` lets a 0.3 m radius
@@ -164,6 +172,7 @@ impl Default for PlannerSettings {
             stand_switch_height: 1.1,
             form_change_speed: 0.3,
             form_change_length: 0.5,
+            corner_length: 0.5,
             crawl_turn_rate: 0.5,
             crawl_relief_cost: 20.0,
             walk_speed: 2.0,
@@ -215,6 +224,7 @@ impl PlannerSettings {
             ("stand_switch_height", self.stand_switch_height),
             ("form_change_speed", self.form_change_speed),
             ("form_change_length", self.form_change_length),
+            ("corner_length", self.corner_length),
             ("crawl_turn_rate", self.crawl_turn_rate),
             ("walk_speed", self.walk_speed),
             ("run_speed", self.run_speed),
