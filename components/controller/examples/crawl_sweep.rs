@@ -62,7 +62,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     for terrain in &terrains {
         for &engine in &engines {
             for &speed in &speeds {
-                let ms: Vec<MetricsSummary> = (0..runs)
+                let ms: Vec<Option<MetricsSummary>> = (0..runs)
                     .into_par_iter()
                     .map(|r| {
                         let mut policy = ModelBasedController::with_all_params(
@@ -117,6 +117,8 @@ fn main() -> Result<(), Box<dyn Error>> {
                                 hold,
                             })
                         };
+                        // A rollout the engine gives up on (rapier's body spun past
+                        // 100 rad/s with some crawl gains) is counted, not fatal.
                         run_path(
                             engine,
                             &scene,
@@ -125,12 +127,20 @@ fn main() -> Result<(), Box<dyn Error>> {
                             &mut policy,
                             &settings,
                         )
-                        .unwrap()
+                        .map_err(|e| eprintln!("{terrain} {engine:?} {speed:.2} m/s run {r}: {e}"))
+                        .ok()
                     })
                     .collect();
+                let diverged = ms.iter().filter(|m| m.is_none()).count();
+                let ms: Vec<MetricsSummary> = ms.into_iter().flatten().collect();
                 println!(
-                    "{terrain} {engine:?} {speed:.2} m/s: {}",
-                    MetricsSummary::sweep_row(&ms)
+                    "{terrain} {engine:?} {speed:.2} m/s: {}{}",
+                    MetricsSummary::sweep_row(&ms),
+                    if diverged > 0 {
+                        format!(" diverged {diverged}")
+                    } else {
+                        String::new()
+                    }
                 );
             }
         }

@@ -94,9 +94,13 @@ pub struct CrawlParams {
     pub max_stride: f64,
     /// Fraction of the cycle a limb is on the ground at rest \[-\].
     pub duty: f64,
-    /// Fraction of the cycle a limb is on the ground at `max_speed` (linear in between):
-    /// a shorter stance leaves the swinging limbs time to reach ahead at speed \[-\].
+    /// Fraction of the cycle a limb is on the ground at `duty_speed` (linear in
+    /// between): a shorter stance leaves the swinging limbs time to reach ahead at
+    /// speed \[-\].
     pub fast_duty: f64,
+    /// Speed at which the duty factor reaches `fast_duty` \[m/s\]: apart from
+    /// `max_speed`, so capping the speed does not change the gait at slower speeds.
+    pub duty_speed: f64,
     /// Integral gain of the slip compensation \[1/s\]: the stance limbs sweep back
     /// faster than the desired velocity by the integrated shortfall of the measured
     /// one (contacts slip and the body lags what the limbs' kinematics promise).
@@ -209,7 +213,7 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 51] = [
+        let ranges: [(&'static str, f64, f64, f64); 52] = [
             ("up_squat_hip", self.up_squat_hip, -2.4, 0.6),
             ("up_squat_knee", self.up_squat_knee, 0.0, 2.7),
             ("sit_back_speed", self.sit_back_speed, 0.0, 2.0),
@@ -240,6 +244,7 @@ impl CrawlParams {
             ("max_stride", self.max_stride, 0.0, 0.6),
             ("duty", self.duty, 0.3, 0.95),
             ("fast_duty", self.fast_duty, 0.3, 0.95),
+            ("duty_speed", self.duty_speed, 0.1, 5.0),
             ("slip_gain", self.slip_gain, 0.0, 20.0),
             ("max_slip", self.max_slip, 0.0, 2.0),
             ("dive_slowdown", self.dive_slowdown, 0.0, 20.0),
@@ -840,7 +845,7 @@ impl CrawlGait {
                     keep * (self.v_cmd[1] + self.v_slip[1]),
                 ];
                 let speed = v_gait[0].hypot(v_gait[1]);
-                let fast = (self.v_cmd[0].hypot(self.v_cmd[1]) / p.max_speed.max(1e-6)).min(1.0);
+                let fast = (self.v_cmd[0].hypot(self.v_cmd[1]) / p.duty_speed).min(1.0);
                 let duty = p.duty + fast * (p.fast_duty - p.duty);
                 let cycle = (p.max_stride / (speed * duty).max(1e-6)).clamp(p.min_cycle, p.cycle);
                 self.phase = (self.phase + CONTROL_DT / cycle).fract();
