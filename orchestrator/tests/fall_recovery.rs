@@ -186,7 +186,7 @@ fn a_fall_under_a_low_ceiling_is_reset_on_hands_and_knees_and_crawls_on() {
     let spec = spec(file.path(), backend());
     let scene = spec.load_scene().unwrap();
     let links = spec.in_process(&scene).unwrap();
-    let (o, _) = drive(links, &spec, 5.0, 16.0);
+    let (o, _) = drive(links, &spec, 5.0, 22.0);
     // The forced fall's reset: on hands and knees, under the ceiling, where it fell
     // (or up to two advances further along, when it follows real falls there).
     let (_, form, x, y) = o.forced.expect("the forced fall happened");
