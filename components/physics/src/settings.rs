@@ -15,6 +15,9 @@ pub struct PhysicsSettings {
     pub friction: f64,
     /// rapier: velocity solver iterations per step (default 2). FIELD-NOTES: 4 costs
     /// ~2x the time of 2 for little gain in stance; 1 is fastest and still stands.
+    /// The crouch-walk is where more pay off (BENCHMARKS.md, Physics): Table 2 rapier
+    /// crouch falls/min flat/slope/rough/stairs 14/12/16/10 at 2, 4/4/8/6 at 4,
+    /// 0/0/8/4 at 8, for 1.8x and 3.3x the physics time per step.
     pub rapier_solver_iterations: usize,
     /// MuJoCo: maximum constraint-solver (Newton) iterations per step (default 50;
     /// MuJoCo's own default is 100, it converges in a few).
