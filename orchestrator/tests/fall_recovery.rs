@@ -144,7 +144,6 @@ fn drive(links: Links, spec: &RunSpec, fall_x: f64, seconds: f64) -> (Outcome, L
                 out.x_fall = x_before;
             }
         }
-        let tick = ls.tick().0;
         x_before = ls.world().agents[0].root_position[0];
         if out.forced.is_some() {
             let s = &ls.world().agents[0];
@@ -152,7 +151,7 @@ fn drive(links: Links, spec: &RunSpec, fall_x: f64, seconds: f64) -> (Outcome, L
                 out.max_head_under = out.max_head_under.max(s.head_position[2]);
             }
             // The reset's own tick is judged at the next step; count later ones.
-            if ls.fall_verdicts(tick)[0] && a.command != ACTION_RESET {
+            if ls.fall_verdicts()[0] && a.command != ACTION_RESET {
                 out.later_falls += 1;
             }
             out.x_end = s.root_position[0];

@@ -420,8 +420,7 @@ fn drive(
         let step = ls.step();
         if let Some(r) = recorder.as_deref_mut() {
             let done = !matches!(step, Ok(StepStatus::Running));
-            let verdicts = ls.fall_verdicts(unwritten.tick);
-            if let Err(e) = r.world(&unwritten, &verdicts) {
+            if let Err(e) = r.world(&unwritten, ls.fall_verdicts()) {
                 bail!(io(e));
             }
             if !done {

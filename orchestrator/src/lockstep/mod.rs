@@ -79,9 +79,8 @@ pub struct Lockstep {
     fallen: Vec<bool>,
     /// Each agent's falls at one spot, for where its next reset goes.
     recovery: Vec<recover::Recovery>,
-    /// The fall rule's verdicts at `judged_tick`.
+    /// The fall rule's verdicts at the last control step.
     fell: Vec<bool>,
-    judged_tick: Option<u64>,
     trackers: Vec<AgentTracker>,
     digest: Digest,
     max_tick: u64,
@@ -132,7 +131,6 @@ impl Lockstep {
             fallen: vec![false; agents],
             recovery: vec![recover::Recovery::default(); agents],
             fell: vec![false; agents],
-            judged_tick: None,
             trackers: instruction_counts
                 .iter()
                 .map(|&n| AgentTracker::new(n, controller.clone()))
@@ -167,7 +165,6 @@ impl Lockstep {
             self.fell[k] = fell;
             self.fallen[k] = fell;
         }
-        self.judged_tick = Some(tick);
         if self.trackers.iter().all(AgentTracker::done) {
             return Ok(StepStatus::Finished);
         }
@@ -235,20 +232,13 @@ impl Lockstep {
     pub fn fallen(&self) -> &[bool] {
         &self.fallen
     }
-    /// Which agents the fall rule found fallen in the world of `tick`, the rule the
-    /// run's fall counts use: the verdicts of the last control step when it judged
-    /// that tick, else the rule applied now with the last plans (a world no step
-    /// judged: the last one of a run that timed out or finished).
-    pub fn fall_verdicts(&self, tick: u64) -> Vec<bool> {
-        if self.judged_tick == Some(tick) {
-            return self.fell.clone();
-        }
-        self.trackers
-            .iter()
-            .zip(&self.plans)
-            .zip(&self.world.agents)
-            .map(|((t, plan), s)| t.is_fallen(&self.scene, s, plan))
-            .collect()
+    /// Which agents the fall rule found fallen at the last control step, the rule
+    /// the run's fall counts use. A recorder writes each world with the verdicts of
+    /// the step that judged it; the last world of a run that timed out or finished,
+    /// which no step judged, carries the last verdicts over (a fall that would begin
+    /// there is not counted by the run's summary, so it is not recorded either).
+    pub fn fall_verdicts(&self) -> &[bool] {
+        &self.fell
     }
     /// The current tick.
     pub fn tick(&self) -> Tick {

@@ -118,6 +118,7 @@ impl AgentTracker {
     }
 
     /// Whether the humanoid has fallen for the posture `plan` asks for.
+    #[cfg(test)]
     pub(crate) fn is_fallen(&self, scene: &Scene, s: &HumanoidState, plan: &PlanMessage) -> bool {
         let (fallen, _) = self.judge(scene, s, plan);
         fallen
