@@ -284,6 +284,11 @@ impl MetricsAccumulator {
         }
     }
 
+    /// Fall events so far (the count [`Self::summary`] reports).
+    pub fn falls(&self) -> u32 {
+        self.falls
+    }
+
     /// The summary so far.
     pub fn summary(&self) -> MetricsSummary {
         let n = self.steps.max(1) as f64;

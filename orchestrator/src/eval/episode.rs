@@ -280,7 +280,7 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
         let stepped = ls.step();
         // A site for each fall the run's own count gained (the count is kept per
         // instruction: a fall across an instruction's end counts in both).
-        let falls: u32 = ls.report()[0].iter().map(|r| r.metrics.falls).sum();
+        let falls = ls.falls(0);
         let i = (ls.plans()[0].instruction as usize).min(forms.len().saturating_sub(1));
         for _ in falls_so_far..falls {
             ep.fall_sites.push(FallSite {

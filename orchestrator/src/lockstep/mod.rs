@@ -261,6 +261,11 @@ impl Lockstep {
         let t = self.tick().seconds();
         self.trackers.iter().map(|tr| tr.report(t)).collect()
     }
+    /// Agent `k`'s falls over every instruction so far (the per-instruction
+    /// reports' sum, without building them).
+    pub fn falls(&self, k: usize) -> u32 {
+        self.trackers.get(k).map_or(0, AgentTracker::falls)
+    }
     /// Give the links back (to shut remote components down).
     pub fn into_links(self) -> Links {
         self.links

@@ -107,6 +107,11 @@ impl AgentTracker {
         }
     }
 
+    /// Falls over every instruction so far (as the report counts them).
+    pub(crate) fn falls(&self) -> u32 {
+        self.instructions.iter().map(|t| t.acc.falls()).sum()
+    }
+
     /// Whether the agent finished every instruction.
     pub(crate) fn done(&self) -> bool {
         self.done
