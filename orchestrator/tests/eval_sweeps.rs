@@ -198,3 +198,41 @@ fn bad_arguments_are_refused_by_name() {
     ]);
     assert!(!ok && err.contains("--max-seconds"), "{err}");
 }
+
+/// random.md's replay command, run as written, retraces the eval's tour bit for bit.
+#[test]
+fn a_random_tour_replays_with_plamo_run() {
+    let out = tmp("replay");
+    eval::run(
+        &RandomScenes::new(1, 11).unwrap(),
+        &opts(&out, 1, Shard::ALL),
+    )
+    .unwrap();
+    let runs = Table::parse(
+        &std::fs::read_to_string(out.join("runs.csv")).unwrap(),
+        "runs",
+    )
+    .unwrap();
+    let digest = runs.str(0, "digest").unwrap().to_string();
+    let md = std::fs::read_to_string(out.join("random.md")).unwrap();
+    let line = md
+        .lines()
+        .find(|l| l.starts_with("plamo run --scene random-11 "))
+        .unwrap_or_else(|| panic!("no replay command in\n{md}"));
+    let dir = tmp("replay-run");
+    let cmd = format!(
+        "{} --quiet --out {}",
+        line.replacen("plamo", env!("CARGO_BIN_EXE_plamo"), 1)
+            .split(" --out ")
+            .next()
+            .unwrap(),
+        dir.display()
+    );
+    let o = Command::new("sh").args(["-c", &cmd]).output().unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains(&format!("trajectory digest {digest}")),
+        "{cmd}\n{text}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}

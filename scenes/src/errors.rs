@@ -74,7 +74,11 @@ pub enum SceneError {
         max_step: f64,
     },
     /// No built-in scene has this name.
-    #[error("no built-in scene {name:?}; the built-in scenes are: {}", valid.join(", "))]
+    #[error(
+        "no built-in scene {name:?}; the built-in scenes are: {}, and random-<seed> for a \
+         random scene",
+        valid.join(", ")
+    )]
     UnknownBuiltin {
         /// The name asked for.
         name: String,

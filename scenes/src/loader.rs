@@ -68,12 +68,21 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     }
 }
 
-/// A built-in scene by name, else a scene file by path.
+/// A built-in scene by name, a random scene by its name `random-<seed>` (the scene
+/// `plamo scenes random --seed <seed>` writes, and `plamo eval random` runs), else a
+/// scene file by path.
 pub fn resolve(name_or_path: &str) -> Result<Scene, SceneError> {
     if crate::builtin_names().contains(&name_or_path) {
         return crate::builtin(name_or_path);
     }
     let path = Path::new(name_or_path);
+    if let Some(seed) = name_or_path
+        .strip_prefix("random-")
+        .and_then(|s| s.parse::<u64>().ok())
+        && !path.exists()
+    {
+        return Ok(crate::random_scene(seed));
+    }
     if path.extension().is_none() && !path.exists() {
         // Looks like a name, not a file: say which names exist.
         return crate::builtin(name_or_path);

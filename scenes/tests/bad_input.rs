@@ -187,6 +187,22 @@ fn unknown_extensions_and_names_are_explained() {
     assert!(m.contains("scene.yaml") && m.contains(".toml"), "{m}");
     let m = plamo_scenes::resolve("nowhere").unwrap_err().to_string();
     assert!(m.contains("nowhere") && m.contains("playground"), "{m}");
+    let m = plamo_scenes::resolve("random-x").unwrap_err().to_string();
+    assert!(m.contains("random-x") && m.contains("random-<seed>"), "{m}");
+}
+
+#[test]
+fn random_scenes_resolve_by_their_names() {
+    let s = plamo_scenes::resolve("random-7").unwrap();
+    let r = plamo_scenes::random_scene(7);
+    assert_eq!(s.name, "random-7");
+    assert_eq!(s.landmarks.len(), r.landmarks.len());
+    assert_eq!(
+        s.height_at(3.3, 12.1).to_bits(),
+        r.height_at(3.3, 12.1).to_bits()
+    );
+    let other = plamo_scenes::resolve("random-8").unwrap();
+    assert_ne!(other.landmarks[0].region, s.landmarks[0].region);
 }
 
 #[derive(Debug, Clone)]

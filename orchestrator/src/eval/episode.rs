@@ -86,6 +86,9 @@ pub struct Episode {
     pub track: Vec<[f64; 2]>,
     /// Where each fall happened, in order (as many as [`Episode::falls`]).
     pub fall_sites: Vec<FallSite>,
+    /// Fingerprint of every world state of the run (as `plamo run` prints it): a
+    /// replay with the same scene, instructions, seed and time limit matches it.
+    pub digest: u64,
 }
 
 /// Where a fall happened: the form the instruction asked for and the ground under
@@ -325,6 +328,7 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
         }
     };
     ep.timed_out = status == StepStatus::TimedOut && ep.run_error.is_none();
+    ep.digest = ls.digest().value();
     let report = ls.report().swap_remove(0);
     let mut steps = 0u64;
     for r in &report {

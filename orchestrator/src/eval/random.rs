@@ -16,7 +16,7 @@ use plamo_scenes::Scene;
 use plotters::style::RGBColor;
 use serde::{Deserialize, Serialize};
 
-use super::episode::{EpisodeSpec, run_episode};
+use super::episode::{EpisodeSpec, TIME_LIMIT_EXTRA, TIME_LIMIT_FACTOR, run_episode};
 use super::ground::GroundKind;
 use super::plot::{Bar, bars};
 use super::table::field;
@@ -88,6 +88,33 @@ pub fn tour(scene: &Scene, scene_seed: u64) -> anyhow::Result<String> {
 /// Where the tours fell: for each form (rows) and kind of ground (columns), the
 /// tours with a fall there and, in brackets, their falls (a humanoid that falls
 /// again and again at one spot counts once among the tours).
+/// How to watch one tour again: `plamo run` on the scene by its name, with the tour's
+/// instructions, seed and time limit, gives the same trajectory as the eval's run.
+fn replay_note(runs: &Table, meta: &Meta) -> anyhow::Result<String> {
+    let Some(r) =
+        (0..runs.rows.len()).find(|&r| runs.str(r, "cause").is_ok_and(|c| c != "success"))
+    else {
+        return Ok(String::new());
+    };
+    let seed = runs.str(r, "scene_seed")?;
+    let limit = match meta.max_seconds {
+        Some(m) => m,
+        None => TIME_LIMIT_FACTOR * runs.f64(r, "planned_time")? + TIME_LIMIT_EXTRA,
+    };
+    Ok(format!(
+        "\n\nEvery tour replays exactly, with its trajectory, plots and replay files, as \
+         `plamo run --scene random-<scene_seed> --instructions \"<instructions>\" --physics \
+         {physics} --seed <scene_seed> --max-seconds <limit> --out <folder>` (its trajectory \
+         digest is runs.csv's `digest`), where the time limit is {TIME_LIMIT_FACTOR} x the planned time + {TIME_LIMIT_EXTRA} s unless \
+         `--max-seconds` was given. The first tour that failed ({cause}):\n\n\
+         ```\nplamo run --scene random-{seed} --instructions \"{text}\" --physics {physics} \
+         --seed {seed} --max-seconds {limit} --out random-{seed}\n```\n",
+        physics = meta.physics,
+        cause = runs.str(r, "cause")?,
+        text = runs.str(r, "instructions")?,
+    ))
+}
+
 fn fall_table(runs: &Table) -> anyhow::Result<String> {
     let grounds = GroundKind::ALL;
     let mut tours = BTreeMap::<(&str, GroundKind), (usize, usize)>::new();
@@ -142,7 +169,7 @@ fn fall_table(runs: &Table) -> anyhow::Result<String> {
     Ok(md)
 }
 
-const COLUMNS: [&str; 20] = [
+const COLUMNS: [&str; 21] = [
     "job",
     "scene_seed",
     "instructions",
@@ -162,6 +189,7 @@ const COLUMNS: [&str; 20] = [
     "planned_time",
     "replans",
     "fall_sites",
+    "digest",
     "error",
 ];
 
@@ -237,6 +265,7 @@ impl Experiment for RandomScenes {
             ep.planned_time.to_string(),
             ep.replans.to_string(),
             ep.fall_sites_field(),
+            format!("{:016x}", ep.digest),
             field(
                 ep.planning_error
                     .as_deref()
@@ -309,13 +338,14 @@ impl Experiment for RandomScenes {
              Causes are assigned in this order: planning (no route at the start, or the \
              planner flagged the rest infeasible), error (a component failed), fall, collision \
              (a wall, ceiling or moving obstacle touched and the tour unfinished), timeout.\n\n\
-             ![outcomes](random.png)\n\n{}",
+             ![outcomes](random.png)\n\n{}{}",
             mean(&plen),
             mean(&ptime),
             mean(&reached),
             mean(&xy),
             mean(&z),
             fall_table(runs)?,
+            replay_note(runs, meta)?,
         ));
         let mut csv = Table {
             header: ["outcome", "runs", "share", "wilson95_low", "wilson95_high"]
