@@ -13,11 +13,15 @@ pub struct PhysicsSettings {
     pub gravity: f64,
     /// Coulomb friction coefficient of every contact (default 1.0).
     pub friction: f64,
-    /// rapier: velocity solver iterations per step (default 2). FIELD-NOTES: 4 costs
-    /// ~2x the time of 2 for little gain in stance; 1 is fastest and still stands.
-    /// The crouch-walk is where more pay off (BENCHMARKS.md, Physics): Table 2 rapier
-    /// crouch falls/min flat/slope/rough/stairs 14/12/16/10 at 2, 4/4/8/6 at 4,
-    /// 0/0/8/4 at 8, for 1.8x and 3.3x the physics time per step.
+    /// rapier: solver iterations per step (default 4, rapier's own default), which
+    /// rapier 0.36 runs as that many substeps of `dt / n`, each re-integrating the
+    /// multibody (the servo springs too) and solving contacts and joint limits once.
+    /// CPU per step is about linear in it: 1.6x that of 2 at 4, 2.95x at 8.
+    /// BENCHMARKS.md "rapier solver settings": the random tours' falls over 40 scenes
+    /// are 205 at 2, 118 at 4, 70 at 8 (the crouch-walk's 133, 65, 33); Table 2's
+    /// crouch-walk falls per minute (flat/slope/rough/stairs) 14/12/16/10, 4/0/6/10,
+    /// 0/0/8/4. 1 falls in the controller's walk tests. Cheaper knobs (internal PGS
+    /// iterations, contact stiffness, no contact recycling) did not help.
     pub rapier_solver_iterations: usize,
     /// MuJoCo: maximum constraint-solver (Newton) iterations per step (default 50;
     /// MuJoCo's own default is 100, it converges in a few).
@@ -39,7 +43,7 @@ impl Default for PhysicsSettings {
             humanoids: 1,
             gravity: 9.81,
             friction: 1.0,
-            rapier_solver_iterations: 2,
+            rapier_solver_iterations: 4,
             mujoco_solver_iterations: 50,
             max_root_force: 2000.0,
             max_root_torque: 1000.0,

@@ -202,17 +202,22 @@ impl RapierHumanoid {
     /// Refresh the servo springs (torque-limited PD) and the root wrench.
     ///
     /// MuJoCo's position servo applies `clamp(kp (q* - q) - kd q', +-max_torque)` with
-    /// `kd` implicit; rapier's spring is `-kp (q - rest) - kp dt q'+` (backward Euler)
-    /// and the DoF damping is implicit too. Unsaturated: rest = q*, damping
-    /// `kd - kp dt + JOINT_DAMPING`, the same discrete servo as MuJoCo's implicitfast.
+    /// `kd` implicit; rapier's spring is `-kp (q - rest) - kp h q'+` (backward Euler) in
+    /// each of the step's n substeps of `h = dt / n`, at the substep's own q, and the DoF
+    /// damping is implicit too. Over the step the spring's velocity term averages
+    /// `kp c q'` with `c = dt (n + 1) / 2n`. Unsaturated: rest = q*, damping
+    /// `kd - kp c + JOINT_DAMPING`, MuJoCo's implicitfast servo at any substep count
+    /// (with `kp dt` at every n, the damping fell short of `kd` by `kp dt (n - 1) / 2n`).
     /// Saturated: the spring is made to push exactly `+-max_torque` (its rest sits
-    /// `max_torque / kp` away, plus `dt q'` to cancel its own velocity term) and only the
+    /// `max_torque / kp` away, plus `c q'` to cancel its own velocity term) and only the
     /// passive damping remains, as MuJoCo clamps the servo's damping with its spring.
     /// Clamping only the spring (as before) left `(kd + kp dt) q'` unclamped: a
     /// shoulder reached half MuJoCo's angle after 83 ms of a 2 rad step
     /// (`saturated_joint_step_responses_agree_across_backends`).
     pub fn apply_controls(&mut self, world: &mut PhysicsWorld) {
-        let dt = world.integration_parameters.dt as f64;
+        // `c` of the doc: the spring's velocity term averaged over rapier's n substeps.
+        let n = world.integration_parameters.num_solver_iterations.max(1) as f64;
+        let spring_dt = world.integration_parameters.dt as f64 * (n + 1.0) / (2.0 * n);
         let idx = self.multibody_index(world);
         let mb = world
             .multibody_joints
@@ -231,11 +236,11 @@ impl RapierHumanoid {
             let (rest, damping) = if servo.abs() <= jd.max_torque {
                 (
                     self.targets[ji],
-                    (jd.kd - jd.kp * dt).max(0.0) + JOINT_DAMPING,
+                    (jd.kd - jd.kp * spring_dt).max(0.0) + JOINT_DAMPING,
                 )
             } else {
                 let torque = jd.max_torque.copysign(servo);
-                (q + torque / jd.kp + dt * v, JOINT_DAMPING)
+                (q + torque / jd.kp + spring_dt * v, JOINT_DAMPING)
             };
             mb.damping_mut()[dof] = damping as f32;
             let link = mb.link_mut(link_id).expect("link");
