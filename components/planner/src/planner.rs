@@ -120,13 +120,17 @@ pub struct Planner {
 
 /// Distance from (x, y) to a region, 0 inside \[m\].
 fn region_distance(r: &Region, x: f64, y: f64) -> f64 {
+    region_signed_distance(r, x, y).max(0.0)
+}
+
+/// Distance from (x, y) to the region's edge \[m\], negative inside.
+fn region_signed_distance(r: &Region, x: f64, y: f64) -> f64 {
     match r {
         Region::Circle { center, radius } => {
             ((x - center[0]).powi(2) + (y - center[1]).powi(2)).sqrt() - radius
         }
         Region::Rect { footprint } => footprint.signed_distance(x, y),
     }
-    .max(0.0)
 }
 
 impl Planner {
@@ -365,6 +369,31 @@ impl Planner {
         (Vec::new(), 0.0)
     }
 
+    /// The goal cells `goal_depth` inside instruction `index`'s target, or as deep as
+    /// any of `cells` lies: a path that ends on the region's edge leaves a body that
+    /// tracks it a few decimetres off standing just outside, never reaching it.
+    fn deep_cells(&self, index: usize, cells: &[usize]) -> Vec<usize> {
+        let region = self
+            .scene
+            .landmark(&self.instructions[index].target)
+            .expect("resolved at parse time")
+            .region;
+        let depth = |c: usize| {
+            let [x, y] = self.grid.position(c);
+            -region_signed_distance(&region, x, y)
+        };
+        let deepest = cells
+            .iter()
+            .map(|&c| depth(c))
+            .fold(f64::NEG_INFINITY, f64::max);
+        let want = self.settings.goal_depth.min(deepest) - 1e-9;
+        cells
+            .iter()
+            .copied()
+            .filter(|&c| depth(c) >= want)
+            .collect()
+    }
+
     /// The passable cell nearest to (x, y) within 3 m that `limits` allows.
     fn start_cell(
         &self,
@@ -427,8 +456,11 @@ impl Planner {
         if !self.components_for(min_head).connected(start, &goals) {
             return Err(self.unreachable(index, UnreachableReason::Disconnected));
         }
-        let (path, limits) = self
-            .search_body(start, &goals, min_head, limits, form)
+        let deep = self.deep_cells(index, &goals);
+        let (path, limits) = Some(&deep)
+            .filter(|d| self.components_for(min_head).connected(start, d))
+            .and_then(|d| self.search_body(start, d, min_head, limits, form))
+            .or_else(|| self.search_body(start, &goals, min_head, limits, form))
             .ok_or_else(|| self.unreachable(index, UnreachableReason::Disconnected))?;
         let ctx = RefineCtx {
             scene: &self.scene,
@@ -573,7 +605,7 @@ impl Planner {
                     };
                     return Err(self.unreachable(index, r));
                 }
-                free
+                self.deep_cells(index, &free)
             } else {
                 vec![
                     self.start_cell(rj.x, rj.y, min_head, &limits)

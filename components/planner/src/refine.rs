@@ -226,16 +226,23 @@ fn menger(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 }
 
 /// Head height allowed by ceilings near (x, y): the lowest top whose footprint is
-/// within the character radius, minus the margin \[m above terrain\]. A top low
-/// enough to crawl under (head below `crawl_switch_height`) counts from
-/// `crawl_body_length` away: the get-down (a squat, hands reaching ahead) must be
-/// over before the body reaches the top, or the head and shoulders hit its edge.
+/// within the character radius, minus `stoop_margin` where that leaves room for a
+/// crouch, else the crawl height (or less, `head_margin` below a lower top) \[m above
+/// terrain\]. A top low enough to crawl under (head below `crawl_switch_height`)
+/// counts from `crawl_body_length` away: the get-down (a squat, hands reaching
+/// ahead) must be over before the body reaches the top, or the head and shoulders
+/// hit its edge.
 pub(crate) fn head_limit(scene: &Scene, s: &PlannerSettings, x: f64, y: f64, ground: f64) -> f64 {
     scene
         .tops
         .iter()
         .filter_map(|t| {
-            let lim = t.z_bottom - ground - s.head_margin;
+            let headroom = t.z_bottom - ground;
+            let lim = if headroom - s.stoop_margin >= s.crouch_height {
+                headroom - s.stoop_margin
+            } else {
+                (headroom - s.head_margin).min(s.crawl_height)
+            };
             let reach = if lim < s.crawl_switch_height {
                 s.crawl_body_length.max(s.character_radius)
             } else {

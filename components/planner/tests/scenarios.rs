@@ -6,7 +6,7 @@ use plamo_planner::{
     ExternalObstacle, PlanError, PlanStatus, Planner, PlannerInput, PlannerOutput, PlannerSettings,
     Prediction, ReplanReason, Trajectory, UnreachableReason, predict_conflict,
 };
-use plamo_scenes::{Footprint, ObstacleShape, ObstacleState, Scene, Wall};
+use plamo_scenes::{Footprint, ObstacleShape, ObstacleState, Region, Scene, Wall};
 
 fn max_ground(t: &Trajectory) -> f64 {
     t.points.iter().map(|p| p.ground).fold(f64::MIN, f64::max)
@@ -135,15 +135,78 @@ fn plans_fit_under_every_ceiling() {
     )
     .unwrap();
     assert_eq!(p.route().len(), 4);
-    let mut lowered = false;
+    let mut under = 0;
     for t in p.route() {
         assert_fits_under_ceilings(&scene, t, s.head_margin);
-        lowered |= t
+        // 0.9 m leaves a standing body less than a crouch under `stoop_margin`: the
+        // route crawls under the roof.
+        for q in t
             .points
             .iter()
-            .any(|q| q.head_height < 0.85 && q.head_height > 0.75);
+            .filter(|q| scene.ceiling_at(q.x, q.y).is_some())
+        {
+            assert!(q.head_height <= s.crawl_height + 1e-9, "{q:?}");
+            under += 1;
+        }
     }
-    assert!(lowered, "the route crosses the 0.9 m roof crouched");
+    assert!(under > 10, "the route does not cross the 0.9 m roof");
+}
+
+#[test]
+fn a_body_on_its_feet_keeps_the_stoop_margin_under_a_roof() {
+    let mut scene = flat_scene();
+    scene.tops[0].z_bottom = 1.2;
+    let s = PlannerSettings::default();
+    let p = Planner::new(
+        scene.clone(),
+        "Walk from the car to the swing",
+        [25.0, 15.0],
+        s.clone(),
+    )
+    .unwrap();
+    let mut under = 0;
+    for q in p.route()[0].points.iter() {
+        if scene.ceiling_at(q.x, q.y).is_some() {
+            // Stooped, not crawling: 1.2 - 0.25 = 0.95 m.
+            assert!(
+                (q.head_height - (1.2 - s.stoop_margin)).abs() < 1e-9,
+                "{q:?}"
+            );
+            under += 1;
+        }
+    }
+    assert!(under > 10, "the walk does not pass under the roof");
+}
+
+#[test]
+fn legs_end_inside_their_landmarks() {
+    let scene = flat_scene();
+    let text = "Walk from the tree to the bench, then walk to the car, then crawl to the swing";
+    let depths = |goal_depth: f64| -> Vec<f64> {
+        let s = PlannerSettings {
+            goal_depth,
+            ..Default::default()
+        };
+        let p = Planner::new(scene.clone(), text, [3.0, 3.0], s).unwrap();
+        p.route()
+            .iter()
+            .zip(["bench", "car", "swing"])
+            .map(|(t, target)| {
+                let Region::Circle { center, radius } = scene.landmark(target).unwrap().region
+                else {
+                    panic!("{target} is a circle")
+                };
+                let end = t.points.last().unwrap();
+                radius - (end.x - center[0]).hypot(end.y - center[1])
+            })
+            .collect()
+    };
+    // Circles of radius 0.5 and 0.8: 0.4 m inside, within a grid cell.
+    let deep = depths(0.4);
+    assert!(deep.iter().all(|&d| d >= 0.3), "{deep:?}");
+    // 0 ends a leg on the region's edge, as A* first meets it.
+    let edge = depths(0.0);
+    assert!(edge.iter().any(|&d| d < 0.15), "{edge:?}");
 }
 
 #[test]
