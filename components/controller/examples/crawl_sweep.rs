@@ -3,13 +3,16 @@
 //! part of it.
 //!
 //! `cargo run --release -p plamo-controller --features mujoco --example crawl_sweep --
-//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc|drop|rise|trace]
+//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc|drop|rise|turn|trace]
 //! [terrains: flat,slope,rough,stairs,ceiling]` (the sloped, rough and stair strips
 //! are the builtin `terrain-*` scenes `plamo eval locomotion` uses, from x 5, y 3;
 //! `ceiling` is flat with the crawl suite's 0.6 m ceiling). `drop`: the plan walks at
 //! the given speed (head 1.47 m, from rest at 1 m/s^2) and drops to the crawl's head
 //! height and 1 m/s at 4 s, the get-down from a walk. `rise`: straight, the plan rises
-//! to a standing head at 5 s (the get-up; a crawler still down counts as fallen). `PLAMO_SWEEP_HOLD=S`: the plan
+//! to a standing head at 5 s (the get-up; a crawler still down counts as fallen).
+//! `turn`: the plan crawls off at a right angle to the standing body's heading (left
+//! in even runs, right in odd ones), as where a walk leg ends at a landmark and the
+//! crawl leg heads elsewhere. `PLAMO_SWEEP_HOLD=S`: the plan
 //! waits S seconds (straight paths), moving its point at rest to where the crawl's
 //! head ends after the get-down (0.7 m ahead of the standing head), so the errors measure the crawl's tracking, not
 //! the get-down's lag behind a plan that left at once.
@@ -40,6 +43,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let arc = arg(5, "straight") == "arc";
     let drop = arg(5, "straight") == "drop";
     let rise = arg(5, "straight") == "rise";
+    let turn = arg(5, "straight") == "turn";
     let settings = ControllerSettings {
         body_mass: plamo_physics::humanoid::total_mass(),
         ..Default::default()
@@ -98,6 +102,13 @@ fn main() -> Result<(), Box<dyn Error>> {
                                     head_height: head,
                                 },
                                 up_at: 5.0,
+                            })
+                        } else if turn {
+                            Box::new(SidePath {
+                                start,
+                                speed,
+                                head_height: head,
+                                side: if r % 2 == 0 { 1.0 } else { -1.0 },
                             })
                         } else if arc {
                             Box::new(ArcPath {
@@ -173,6 +184,36 @@ impl HeadPath for HeldPath {
     }
     fn head_height(&self) -> f64 {
         self.line.head_height
+    }
+}
+
+/// A straight plan along +Y (`side` 1) or -Y (-1), at right angles to the standing
+/// body's heading (+X).
+struct SidePath {
+    start: [f64; 2],
+    speed: f64,
+    head_height: f64,
+    side: f64,
+}
+
+impl HeadPath for SidePath {
+    fn point(&self, scene: &plamo_scenes::Scene, t: f64) -> plamo_controller::Waypoint {
+        let (x, y) = (
+            self.start[0],
+            self.start[1] + self.side * self.speed * t.max(0.0),
+        );
+        plamo_controller::Waypoint {
+            x,
+            y,
+            z: scene.height_at(x, y) + self.head_height,
+            v: self.speed,
+        }
+    }
+    fn direction(&self, _t: f64) -> [f64; 2] {
+        [0.0, self.side]
+    }
+    fn head_height(&self) -> f64 {
+        self.head_height
     }
 }
 
@@ -259,7 +300,18 @@ fn trace(
         .unwrap_or(0);
     let start = staggered_start(origin, r);
     // `PLAMO_TRACE_DROP_AT`: walk at `speed` and drop to the crawl then (see `drop`).
+    // `PLAMO_TRACE_TURN=1` (or -1): crawl off at a right angle (see `turn`).
+    let turn: Option<f64> = std::env::var("PLAMO_TRACE_TURN")
+        .ok()
+        .map(|v| v.parse())
+        .transpose()?;
     let path: Box<dyn HeadPath> = match std::env::var("PLAMO_TRACE_DROP_AT") {
+        _ if turn.is_some() => Box::new(SidePath {
+            start,
+            speed,
+            head_height: head,
+            side: turn.unwrap_or(1.0).signum(),
+        }),
         Ok(v) => Box::new(DropPath {
             start,
             walk_speed: speed,

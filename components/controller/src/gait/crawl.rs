@@ -11,7 +11,8 @@
 //!   its lever), in the air it moves from its lift-off point to half a stride ahead,
 //!   lifted over the local height map. Phase offsets and duty factor make the
 //!   sequence (a lateral-sequence walk keeps three limbs down).
-//! - The plan's next waypoint gives the desired velocity (rate-limited), its
+//! - The plan's next waypoint gives the desired velocity (rate-limited; sideways and
+//!   backward at most `max_side_speed` until the body, just down, faces the plan), its
 //!   direction the yaw rate; the cycle shortens with speed so strides stay short, and
 //!   the duty factor falls from `duty` at rest to `fast_duty` at `max_speed`.
 //! - Speed feedback: contacts slip, so the stance limbs sweep back at the desired
@@ -132,6 +133,12 @@ pub struct CrawlParams {
     pub max_accel: f64,
     /// Highest crawl speed \[m/s\].
     pub max_speed: f64,
+    /// Highest sideways or backward speed the crawl is asked for after the get-down
+    /// until it faces the plan \[m/s\]: where the plan lies to the side or behind (a
+    /// crawl leg turning off where a walk leg ended) the body turns towards it
+    /// (`yaw_gain`) and crawls forward; stepping sideways at the plan's speed rocked
+    /// the body over a hand or knee.
+    pub max_side_speed: f64,
     /// Time to get down from standing \[s\].
     pub down_time: f64,
     /// Hands reach ahead per m/s of forward velocity while getting down \[s\].
@@ -213,7 +220,8 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 52] = [
+        let ranges: [(&'static str, f64, f64, f64); 53] = [
+            ("max_side_speed", self.max_side_speed, 0.0, 5.0),
             ("up_squat_hip", self.up_squat_hip, -2.4, 0.6),
             ("up_squat_knee", self.up_squat_knee, 0.0, 2.7),
             ("sit_back_speed", self.sit_back_speed, 0.0, 2.0),
@@ -479,8 +487,14 @@ pub(crate) struct CrawlGait {
     v_filt: [f64; 2],
     /// Slip compensation added to the stance limbs' sweep, heading frame \[m/s\].
     v_slip: [f64; 2],
+    /// Whether the crawl is still turning towards the plan after the get-down (see
+    /// `max_side_speed`).
+    aligning: bool,
     last_wrench: RootWrench,
 }
+
+/// Heading error below which a crawl that has just got down faces its plan \[rad\].
+const ALIGNED: f64 = 0.3;
 
 /// Largest heading error the residual yaw torque turns towards while getting down or
 /// up \[rad\].
@@ -506,6 +520,7 @@ impl CrawlGait {
             v_cmd: [0.0; 2],
             v_filt: [0.0; 2],
             v_slip: [0.0; 2],
+            aligning: false,
             last_wrench: RootWrench::default(),
         }
     }
@@ -753,6 +768,17 @@ impl CrawlGait {
         } else {
             0.0
         };
+        // Just down, only creep sideways or back until facing the plan: the yaw rate
+        // turns the body, and a crawl stepping sideways at speed rolls over a hand or
+        // knee. Once aligned the plan's sideways speed counts again (under a ceiling
+        // that yaws the body by its back, stepping back to the plan keeps it up).
+        if self.aligning && heading_err.abs() < ALIGNED {
+            self.aligning = false;
+        }
+        if self.aligning {
+            v_plan[0] = v_plan[0].max(-p.max_side_speed);
+            v_plan[1] = v_plan[1].clamp(-p.max_side_speed, p.max_side_speed);
+        }
         let f = self.frame(obs);
         let nominal = self.nominal(&f);
 
@@ -779,6 +805,7 @@ impl CrawlGait {
                     // limbs at it pitched the body onto its head.
                     self.v_cmd = [0.0; 2];
                     self.v_filt = [vx, vy];
+                    self.aligning = true;
                     Mode::Crawl
                 } else {
                     Mode::Down { t, pitch0, height0 }
@@ -946,6 +973,7 @@ impl CrawlGait {
         self.v_cmd = [0.0; 2];
         self.v_filt = [0.0; 2];
         self.v_slip = [0.0; 2];
+        self.aligning = false;
     }
 }
 
