@@ -18,8 +18,8 @@ pub struct PhysicsSettings {
     /// multibody (the servo springs too) and solving contacts and joint limits once.
     /// CPU per step is about linear in it: 1.6x that of 2 at 4, 2.95x at 8.
     /// BENCHMARKS.md "rapier solver settings": the random tours' falls over 40 scenes
-    /// are 205 at 2, 118 at 4 (the crouch-walk's 133, 65), and 70 at 8 before the
-    /// servo's substep compensation; Table 2's crouch-walk falls per minute
+    /// are 205 at 2, 118 at 4 (the crouch-walk's 133, 65) and 82 at 8 (70 without
+    /// the servo's substep compensation); Table 2's crouch-walk falls per minute
     /// (flat/slope/rough/stairs) 14/12/16/10 at 2, 4/0/6/10 at 4, 4/4/8/10 at 8.
     /// 1 falls in the controller's walk tests. Cheaper knobs (internal PGS
     /// iterations, contact stiffness, no contact recycling) did not help.
