@@ -225,9 +225,10 @@ fn menger(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     if d <= 1e-12 { 0.0 } else { 2.0 * cross / d }
 }
 
-/// Head height allowed by ceilings near (x, y): the lowest top whose footprint is
-/// within the character radius, minus `stoop_margin` where that leaves room for a
-/// crouch, else the crawl height (or less, `head_margin` below a lower top) \[m above
+/// Head height allowed by ceilings near (x, y), from the lowest top whose footprint
+/// is within the character radius: its height minus `stoop_margin` where that leaves
+/// room to stand, else the crouch height where that stays `head_margin` under it,
+/// else the crawl height (or less, `head_margin` below a lower top) \[m above
 /// terrain\]. A top low enough to crawl under (head below `crawl_switch_height`)
 /// counts from `crawl_body_length` away: the get-down (a squat, hands reaching
 /// ahead) must be over before the body reaches the top, or the head and shoulders
@@ -238,8 +239,12 @@ pub(crate) fn head_limit(scene: &Scene, s: &PlannerSettings, x: f64, y: f64, gro
         .iter()
         .filter_map(|t| {
             let headroom = t.z_bottom - ground;
-            let lim = if headroom - s.stoop_margin >= s.crouch_height {
+            // The controller keeps its head near the height asked when standing,
+            // crouching or crawling, not in between (`stoop_margin`).
+            let lim = if headroom - s.stoop_margin >= s.stand_height {
                 headroom - s.stoop_margin
+            } else if headroom - s.head_margin >= s.crouch_height - 1e-9 {
+                s.crouch_height
             } else {
                 (headroom - s.head_margin).min(s.crawl_height)
             };

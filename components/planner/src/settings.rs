@@ -18,12 +18,17 @@ pub struct PlannerSettings {
     /// Margin between the head and any ceiling: head <= headroom - margin \[m\].
     /// Also the margin A* adds to the crawl height. Default 0.1.
     pub head_margin: f64,
-    /// Margin between the head (the centre of its 0.1 m sphere) and a ceiling for a
-    /// body on its feet (not in the paper) \[m\]: under a top, a crouch-walk, walk or
-    /// run keeps its head this far below the ceiling, and crawls where that leaves
-    /// less than `crouch_height`. With `head_margin`'s 0.1 the head's crown touched the
-    /// ceiling; a crouch's head bobs and tracks its height to ~0.1 m, and stalled at
-    /// the edge of a 0.9 m ceiling in 4 of 100 random tours. Default 0.25.
+    /// Margin between a standing head (the centre of its 0.1 m sphere) and a
+    /// ceiling (not in the paper) \[m\]. Under a top that leaves less than
+    /// `stand_height` + this, a body on its feet crouches at `crouch_height` (where
+    /// that stays `head_margin` under the ceiling) or else crawls. The paper's plan
+    /// lowers the head to any height, but between a crouch and standing the
+    /// controller's blended posture holds its head well above the height asked (a
+    /// 0.97 m request stood at 1.2 m against a 1.22 m ceiling's edge for 50 s). In 200
+    /// random MuJoCo tours, tours that reached every landmark, falls allowed, rose
+    /// 186 -> 198 and collision failures fell 8 -> 2. Success went 90 -> 84, inside the
+    /// noise. Crawling wherever a crouch kept less than this margin went
+    /// 90 -> 76. Default 0.25.
     pub stoop_margin: f64,
     /// Head height when crawling \[m\]. Default 0.4.
     pub crawl_height: f64,
