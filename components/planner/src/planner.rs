@@ -333,15 +333,19 @@ impl Planner {
         }
     }
 
+    /// The region of instruction `index`'s target landmark.
+    fn target_region(&self, index: usize) -> Region {
+        self.scene
+            .landmark(&self.instructions[index].target)
+            .expect("resolved at parse time")
+            .region
+    }
+
     /// Goal cells of instruction `index`'s target and the reach margin \[m\]: the
     /// passable cells inside the region, or, when there are none (a landmark on an
     /// obstacle), those within the character radius plus two cells of it.
     fn goal_cells(&self, index: usize, min_head: f32) -> (Vec<usize>, f64) {
-        let region = self
-            .scene
-            .landmark(&self.instructions[index].target)
-            .expect("resolved at parse time")
-            .region;
+        let region = self.target_region(index);
         let g = &self.grid;
         let (lo, hi) = region.aabb();
         let margins = [0.0, self.settings.character_radius + 2.0 * g.resolution];
@@ -373,11 +377,7 @@ impl Planner {
     /// any of `cells` lies: a path that ends on the region's edge leaves a body that
     /// tracks it a few decimetres off standing just outside, never reaching it.
     fn deep_cells(&self, index: usize, cells: &[usize]) -> Vec<usize> {
-        let region = self
-            .scene
-            .landmark(&self.instructions[index].target)
-            .expect("resolved at parse time")
-            .region;
+        let region = self.target_region(index);
         let depth = |c: usize| {
             let [x, y] = self.grid.position(c);
             -region_signed_distance(&region, x, y)
@@ -485,11 +485,7 @@ impl Planner {
     pub fn in_target(&self, index: usize, x: f64, y: f64) -> bool {
         let form = self.instructions[index].locomotion;
         let (_, margin) = self.goal_cells(index, self.min_head(form));
-        let region = self
-            .scene
-            .landmark(&self.instructions[index].target)
-            .expect("resolved at parse time")
-            .region;
+        let region = self.target_region(index);
         region_distance(&region, x, y) <= margin + 1e-9
     }
 
