@@ -47,6 +47,18 @@ impl Scene {
         self.ceiling_at(x, y).map(|c| c - self.height_at(x, y))
     }
 
+    /// Lowest free height under the tops whose footprint comes within `distance` of
+    /// (x, y), over the terrain at (x, y) \[m\], or `None` with no top that near: the
+    /// room a body reaching `distance` from (x, y) has.
+    pub fn headroom_near(&self, x: f64, y: f64, distance: f64) -> Option<f64> {
+        let ground = self.height_at(x, y);
+        self.tops
+            .iter()
+            .filter(|t| t.footprint.signed_distance(x, y) < distance)
+            .map(|t| t.z_bottom - ground)
+            .reduce(f64::min)
+    }
+
     /// Signed distance from (x, y) to the nearest wall, negative inside one \[m\];
     /// `f64::INFINITY` when there are no walls.
     pub fn wall_clearance(&self, x: f64, y: f64) -> f64 {
@@ -183,6 +195,10 @@ mod tests {
         assert_eq!(s.ceiling_at(2.2, 2.0), Some(0.7));
         assert_eq!(s.ceiling_at(9.0, 9.0), None);
         assert!((s.headroom_at(2.2, 2.0).unwrap() - 0.45).abs() < 1e-12);
+        // 0.2 m west of top a, 0.7 m west of the lower top b.
+        assert!((s.headroom_near(0.8, 2.0, 0.3).unwrap() - 0.75).abs() < 1e-12);
+        assert!((s.headroom_near(0.8, 2.0, 1.0).unwrap() - 0.45).abs() < 1e-12);
+        assert_eq!(s.headroom_near(0.8, 2.0, 0.1), None);
     }
 
     #[test]

@@ -216,12 +216,8 @@ fn place(scene: &Scene, xy: [f64; 2], h: f64, yaw: f64, at_root: bool) -> Option
     // Only a top may turn a standing plan into a crawl; next to a wall the crawl's
     // longer body fits no better, and the plan's form is kept elsewhere.
     let under_top = scene
-        .headroom_at(xy[0], xy[1])
-        .is_some_and(|r| r < STAND_HEADROOM)
-        || scene.tops.iter().any(|t| {
-            t.footprint.signed_distance(xy[0], xy[1]) < STAND_RADIUS
-                && t.z_bottom - scene.height_at(xy[0], xy[1]) < STAND_HEADROOM
-        });
+        .headroom_near(xy[0], xy[1], STAND_RADIUS)
+        .is_some_and(|r| r < STAND_HEADROOM);
     crawl.filter(|_| under_top)
 }
 

@@ -141,13 +141,9 @@ impl AgentTracker {
         // headroom of tops within `TOP_GRACE` of the root caps the height, so the fall
         // rule does not stand a crawler up inside a top.
         let r = s.root_position;
-        let ground = scene.height_at(r[0], r[1]);
         let headroom = scene
-            .tops
-            .iter()
-            .filter(|t| t.footprint.signed_distance(r[0], r[1]) < TOP_GRACE)
-            .map(|t| t.z_bottom - ground)
-            .fold(f64::INFINITY, f64::min);
+            .headroom_near(r[0], r[1], TOP_GRACE)
+            .unwrap_or(f64::INFINITY);
         // A taller form is asked for at once where a leg ends; the body stands up at
         // a bounded rate, and so does the bar.
         let requested = plan
