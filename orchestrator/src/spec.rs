@@ -2,7 +2,7 @@
 //! components are built from it. The orchestrator and every component process build
 //! from the same [`RunSpec`], so they agree on the scene, the agents and their start.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use plamo_controller::{
     ControllerComponent, ControllerSettings, CrawlParams, GaitParams, ModelBasedController,
@@ -32,14 +32,30 @@ pub struct RunSpec {
     pub params: ParamFiles,
 }
 
-/// Parameter files for the model-based controller, e.g. from `plamo tune`; `None`
-/// keeps the built-in file.
+/// Parameter files for the planner and the model-based controller (e.g. from `plamo
+/// tune`); `None` keeps the built-in parameters.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ParamFiles {
     /// Biped gait parameters (`gait.toml` layout).
     pub gait: Option<PathBuf>,
     /// Crawl parameters (`crawl.toml` layout).
     pub crawl: Option<PathBuf>,
+    /// Planner parameters: a TOML table of [`PlannerSettings`] fields; fields it
+    /// leaves out keep their defaults.
+    pub planner: Option<PathBuf>,
+}
+
+/// Planner settings from a TOML file of [`PlannerSettings`] fields (the rest keep
+/// their defaults), validated; the error names the file and the field.
+pub fn load_planner_settings(path: &Path) -> Result<PlannerSettings, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("planner parameter file {}: {e}", path.display()))?;
+    let settings: PlannerSettings = toml::from_str(&text)
+        .map_err(|e| format!("planner parameter file {}: {e}", path.display()))?;
+    settings
+        .validate()
+        .map_err(|e| format!("planner parameter file {}: {e}", path.display()))?;
+    Ok(settings)
 }
 
 fn setup(e: impl std::fmt::Display) -> RunError {
@@ -87,13 +103,12 @@ impl RunSpec {
     /// Agent `k`'s planner.
     pub fn planner(&self, scene: &Scene, k: usize) -> Result<PlannerComponent, RunError> {
         let p = self.placement(scene, k)?;
-        let planner = Planner::new(
-            scene.clone(),
-            &self.instructions[k],
-            [p.x, p.y],
-            PlannerSettings::default(),
-        )
-        .map_err(|e| RunError::Setup(format!("agent {k}: {e}")))?;
+        let settings = match &self.params.planner {
+            Some(f) => load_planner_settings(f).map_err(RunError::Setup)?,
+            None => PlannerSettings::default(),
+        };
+        let planner = Planner::new(scene.clone(), &self.instructions[k], [p.x, p.y], settings)
+            .map_err(|e| RunError::Setup(format!("agent {k}: {e}")))?;
         Ok(PlannerComponent::new(planner, k as u32))
     }
 
@@ -180,12 +195,13 @@ impl RunSpec {
                 .map_or("built-in".to_string(), |p| p.display().to_string())
         };
         format!(
-            "scene {scene}, physics {}, seed {}, {} agent(s), instructions #{h:016x}, gait {}, crawl {}",
+            "scene {scene}, physics {}, seed {}, {} agent(s), instructions #{h:016x}, gait {}, crawl {}, planner {}",
             self.backend,
             self.seed,
             self.agents(),
             file(&self.params.gait),
-            file(&self.params.crawl)
+            file(&self.params.crawl),
+            file(&self.params.planner)
         )
     }
 
@@ -206,6 +222,7 @@ impl RunSpec {
         for (flag, file) in [
             ("--gait-params", &self.params.gait),
             ("--crawl-params", &self.params.crawl),
+            ("--planner-params", &self.params.planner),
         ] {
             if let Some(f) = file {
                 a.push(flag.into());

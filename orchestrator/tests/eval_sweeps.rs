@@ -27,6 +27,7 @@ fn opts(out: &Path, threads: usize, shard: Shard) -> RunOptions {
         threads,
         max_seconds: Some(1.0),
         quiet: true,
+        planner: None,
     }
 }
 
@@ -199,40 +200,58 @@ fn bad_arguments_are_refused_by_name() {
     assert!(!ok && err.contains("--max-seconds"), "{err}");
 }
 
-/// random.md's replay command, run as written, retraces the eval's tour bit for bit.
+/// random.md's replay command, run as written, retraces the eval's tour bit for bit,
+/// with the built-in planner settings and with a `--planner-params` file.
 #[test]
 fn a_random_tour_replays_with_plamo_run() {
-    let out = tmp("replay");
-    eval::run(
-        &RandomScenes::new(1, 11).unwrap(),
-        &opts(&out, 1, Shard::ALL),
-    )
-    .unwrap();
-    let runs = Table::parse(
-        &std::fs::read_to_string(out.join("runs.csv")).unwrap(),
-        "runs",
-    )
-    .unwrap();
-    let digest = runs.str(0, "digest").unwrap().to_string();
-    let md = std::fs::read_to_string(out.join("random.md")).unwrap();
-    let line = md
-        .lines()
-        .find(|l| l.starts_with("plamo run --scene random-11 "))
-        .unwrap_or_else(|| panic!("no replay command in\n{md}"));
-    let dir = tmp("replay-run");
-    let cmd = format!(
-        "{} --quiet --out {}",
-        line.replacen("plamo", env!("CARGO_BIN_EXE_plamo"), 1)
-            .split(" --out ")
-            .next()
-            .unwrap(),
-        dir.display()
-    );
-    let o = Command::new("sh").args(["-c", &cmd]).output().unwrap();
-    let text = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        text.contains(&format!("trajectory digest {digest}")),
-        "{cmd}\n{text}\n{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    // Twice the paper's a_max: the plan speeds up faster from the first step.
+    let brisk = plamo_planner::PlannerSettings {
+        a_max: 1.0,
+        ..Default::default()
+    };
+    let mut digests = Vec::new();
+    for (name, planner) in [("replay", None), ("replay-brisk", Some(brisk))] {
+        let out = tmp(name);
+        // Past the get-down that starts this crawl tour, where the plans differ.
+        let o = RunOptions {
+            planner,
+            max_seconds: Some(4.0),
+            ..opts(&out, 1, Shard::ALL)
+        };
+        eval::run(&RandomScenes::new(1, 11).unwrap(), &o).unwrap();
+        let runs = Table::parse(
+            &std::fs::read_to_string(out.join("runs.csv")).unwrap(),
+            "runs",
+        )
+        .unwrap();
+        let digest = runs.str(0, "digest").unwrap().to_string();
+        let md = std::fs::read_to_string(out.join("random.md")).unwrap();
+        let line = md
+            .lines()
+            .find(|l| l.starts_with("plamo run --scene random-11 "))
+            .unwrap_or_else(|| panic!("no replay command in\n{md}"));
+        assert_eq!(
+            line.contains("--planner-params"),
+            o.planner.is_some(),
+            "{line}"
+        );
+        let dir = tmp(&format!("{name}-run"));
+        let cmd = format!(
+            "{} --quiet --out {}",
+            line.replacen("plamo", env!("CARGO_BIN_EXE_plamo"), 1)
+                .split(" --out ")
+                .next()
+                .unwrap(),
+            dir.display()
+        );
+        let o = Command::new("sh").args(["-c", &cmd]).output().unwrap();
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            text.contains(&format!("trajectory digest {digest}")),
+            "{cmd}\n{text}\n{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        digests.push(digest);
+    }
+    assert_ne!(digests[0], digests[1], "the planner file changed nothing");
 }

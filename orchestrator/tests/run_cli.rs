@@ -642,3 +642,58 @@ fn parameter_files_from_tune_drive_the_controller_in_both_modes() {
         assert!(err.contains(path.to_str().unwrap()), "{err}");
     }
 }
+
+/// The fastest planned speed in a run's `plans.json` \[m/s\].
+fn planned_top_speed(out: &Path) -> f64 {
+    let plans: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("plans.json")).unwrap()).unwrap();
+    plans["initial"][0]["route"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|leg| leg["points"].as_array().unwrap().iter())
+        .map(|p| p["v"].as_f64().unwrap())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn a_planner_parameter_file_drives_the_planner_in_both_modes() {
+    let dir = out_dir("planner-params");
+    let file = dir.join("planner.toml");
+    // Slower than the run leg plans by default (1.64 m/s: a_min caps it on 13 m).
+    std::fs::write(&file, "run_speed = 1.2\n").unwrap();
+    let base = ["--instructions", ROUTE, "--max-seconds", "3", "--seed", "7"];
+    let mut args = base.to_vec();
+    args.extend(["--planner-params", file.to_str().unwrap()]);
+    let slow = same_in_both_modes(&args, "cli-test-planner-params");
+    let built_in_dir = out_dir("planner-params-built-in");
+    let built_in = run_ok(&base, &built_in_dir);
+    assert_ne!(digest(&slow), digest(&built_in), "the file changed nothing");
+    let slow_dir = out_dir("planner-params-slow");
+    run_ok(&args, &slow_dir);
+    let (v_slow, v_default) = (
+        planned_top_speed(&slow_dir),
+        planned_top_speed(&built_in_dir),
+    );
+    assert!(
+        v_slow <= 1.2 + 1e-9 && v_default > 1.5,
+        "{v_slow} {v_default}"
+    );
+    // A misspelt field and a value out of range are named with the file.
+    for (text, names) in [
+        ("run_sped = 1.2\n", ["run_sped", "run_speed"]),
+        ("run_speed = -1.0\n", ["run_speed", "> 0"]),
+    ] {
+        std::fs::write(&file, text).unwrap();
+        let o = plamo(&["--instructions", ROUTE, "--max-seconds", "1"])
+            .args(["--planner-params", file.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{text}");
+        assert!(err.contains(file.to_str().unwrap()), "{err}");
+        for n in names {
+            assert!(err.contains(n), "`{n}` not in: {err}");
+        }
+    }
+}

@@ -67,11 +67,22 @@ pub struct SweepArgs {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
+    /// Planner parameter file: a TOML table of planner settings (see
+    /// `PlannerSettings`; fields left out keep their defaults). Each experiment sets
+    /// its own swept fields on top of it.
+    #[arg(long)]
+    planner_params: Option<PathBuf>,
 }
 
 impl SweepArgs {
-    fn options(&self, name: &str) -> RunOptions {
-        RunOptions {
+    fn options(&self, name: &str) -> anyhow::Result<RunOptions> {
+        let planner = self
+            .planner_params
+            .as_deref()
+            .map(plamo::spec::load_planner_settings)
+            .transpose()
+            .map_err(anyhow::Error::msg)?;
+        Ok(RunOptions {
             physics: self.physics,
             out: self
                 .out
@@ -81,7 +92,8 @@ impl SweepArgs {
             threads: self.threads,
             max_seconds: self.max_seconds,
             quiet: self.quiet,
-        }
+            planner,
+        })
     }
 }
 
@@ -165,7 +177,7 @@ fn report(md: anyhow::Result<String>, out: &std::path::Path) -> anyhow::Result<E
 }
 
 fn sweep<E: Experiment>(e: &E, a: &SweepArgs) -> anyhow::Result<ExitCode> {
-    let opts = a.options(E::NAME);
+    let opts = a.options(E::NAME)?;
     report(eval::run(e, &opts), &opts.out)
 }
 

@@ -46,6 +46,10 @@ pub struct SpecArgs {
     /// built-in one).
     #[arg(long)]
     crawl_params: Option<PathBuf>,
+    /// Planner parameter file: a TOML table of planner settings (see
+    /// `PlannerSettings`; fields left out keep their defaults).
+    #[arg(long)]
+    planner_params: Option<PathBuf>,
 }
 
 impl SpecArgs {
@@ -63,6 +67,10 @@ impl SpecArgs {
                 "{m} --instructions for {n} agents: give one for all or one per agent"
             ),
         };
+        // A bad planner file fails here, before any component process starts.
+        if let Some(f) = &self.planner_params {
+            plamo::spec::load_planner_settings(f).map_err(anyhow::Error::msg)?;
+        }
         Ok(RunSpec {
             scene: self.scene.clone(),
             instructions,
@@ -77,6 +85,11 @@ impl SpecArgs {
                     .transpose()?,
                 crawl: self
                     .crawl_params
+                    .as_deref()
+                    .map(std::path::absolute)
+                    .transpose()?,
+                planner: self
+                    .planner_params
                     .as_deref()
                     .map(std::path::absolute)
                     .transpose()?,

@@ -54,11 +54,11 @@ impl Dynamic {
     }
 }
 
-fn settings(replan: bool) -> PlannerSettings {
+fn settings(base: PlannerSettings, replan: bool) -> PlannerSettings {
     PlannerSettings {
         walk_speed: WALK_SPEED,
         dynamic_replanning: replan,
-        ..Default::default()
+        ..base
     }
 }
 
@@ -106,7 +106,8 @@ pub fn scene(seed: u64) -> anyhow::Result<Scene> {
         instructions: INSTRUCTION.into(),
         backend: plamo_physics::BackendKind::Rapier,
         seed,
-        planner: settings(true),
+        // The scene is the seed's alone: timed against the default plan.
+        planner: settings(PlannerSettings::default(), true),
         max_seconds: None,
     };
     let (_, planner) = plan(&spec).map_err(anyhow::Error::msg)?;
@@ -207,14 +208,14 @@ impl Experiment for Dynamic {
             instructions: INSTRUCTION.into(),
             backend: opts.physics,
             seed,
-            planner: settings(replan),
+            planner: settings(opts.planner(), replan),
             max_seconds: opts.max_seconds,
         };
         // Planner only: would the start plan meet an obstacle anywhere along it?
         let conflict = plan(&spec).ok().is_some_and(|(_, p)| {
             let whole = PlannerSettings {
                 collision_horizon: p.route().last().map_or(1.0, |t| t.end_time() + 1.0),
-                ..settings(replan)
+                ..spec.planner.clone()
             };
             p.route()
                 .iter()

@@ -22,6 +22,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use plamo_physics::BackendKind;
+use plamo_planner::PlannerSettings;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -84,7 +85,21 @@ pub struct RunOptions {
     pub max_seconds: Option<f64>,
     /// No progress bar.
     pub quiet: bool,
+    /// Planner settings every run starts from (each experiment sets its swept fields
+    /// on top); `None`: the defaults.
+    pub planner: Option<PlannerSettings>,
 }
+
+impl RunOptions {
+    /// The planner settings every run starts from.
+    pub fn planner(&self) -> PlannerSettings {
+        self.planner.clone().unwrap_or_default()
+    }
+}
+
+/// The planner settings of a sweep run with `--planner-params`, written next to
+/// `eval.json` (every field, defaults included).
+pub const PLANNER_FILE: &str = "planner.toml";
 
 /// What every output folder says about the sweep that wrote it (`eval.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -102,6 +117,16 @@ pub struct Meta {
     pub shard: Option<Shard>,
     /// The experiment's own parameters.
     pub params: serde_json::Value,
+    /// Planner settings from `--planner-params`, when given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub planner: Option<PlannerSettings>,
+}
+
+impl Meta {
+    /// The planner settings every run of the sweep started from.
+    pub fn planner(&self) -> PlannerSettings {
+        self.planner.clone().unwrap_or_default()
+    }
 }
 
 /// One experiment: its jobs, how one job runs, and how rows become a summary.
@@ -183,6 +208,7 @@ pub fn run<E: Experiment>(e: &E, opts: &RunOptions) -> anyhow::Result<String> {
         jobs: jobs.len(),
         shard: (opts.shard != Shard::ALL).then_some(opts.shard),
         params: e.params(),
+        planner: opts.planner.clone(),
     };
     write_folder(e, &meta, table, &opts.out)
 }
@@ -199,6 +225,10 @@ fn write_folder<E: Experiment>(
         out.join("eval.json"),
         serde_json::to_string_pretty(meta)? + "\n",
     )?;
+    // The summaries' commands pass this file, so they rerun the sweep as it was.
+    if let Some(p) = &meta.planner {
+        std::fs::write(out.join(PLANNER_FILE), toml::to_string(p)?)?;
+    }
     // The summary reads the rows back from their text, so a merged sweep (which only
     // has the text) summarizes exactly the same numbers.
     let text = table.to_csv();
@@ -369,8 +399,13 @@ pub fn command_line(meta: &Meta, args: &str) -> String {
     let cap = meta
         .max_seconds
         .map_or(String::new(), |m| format!(" --max-seconds {m}"));
+    let planner = if meta.planner.is_some() {
+        format!(" --planner-params {PLANNER_FILE}")
+    } else {
+        String::new()
+    };
     format!(
-        "plamo eval {} --physics {}{args}{cap}",
+        "plamo eval {} --physics {}{args}{cap}{planner}",
         meta.experiment, meta.physics
     )
 }

@@ -49,10 +49,10 @@ impl Pyramid {
         Ok(Self { runs, seed, c })
     }
 
-    fn settings(c: f64) -> PlannerSettings {
+    fn settings(base: PlannerSettings, c: f64) -> PlannerSettings {
         PlannerSettings {
             slope_preference_c: c,
-            ..Default::default()
+            ..base
         }
     }
 }
@@ -110,7 +110,7 @@ impl Experiment for Pyramid {
             instructions: INSTRUCTION.into(),
             backend: opts.physics,
             seed,
-            planner: Self::settings(c),
+            planner: Self::settings(opts.planner(), c),
             max_seconds: opts.max_seconds,
         };
         let top = plan(&spec).map_or(f64::NAN, |(_, p)| {
@@ -246,7 +246,7 @@ impl Experiment for Pyramid {
                 instructions: INSTRUCTION.into(),
                 backend: plamo_physics::BackendKind::Rapier,
                 seed: self.seed,
-                planner: Self::settings(c),
+                planner: Self::settings(meta.planner(), c),
                 max_seconds: None,
             };
             if let Ok((_, p)) = plan(&spec) {

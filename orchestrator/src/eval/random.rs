@@ -11,7 +11,6 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use anyhow::bail;
-use plamo_planner::PlannerSettings;
 use plamo_scenes::Scene;
 use plotters::style::RGBColor;
 use serde::{Deserialize, Serialize};
@@ -20,7 +19,7 @@ use super::episode::{EpisodeSpec, TIME_LIMIT_EXTRA, TIME_LIMIT_FACTOR, run_episo
 use super::ground::GroundKind;
 use super::plot::{Bar, bars};
 use super::table::field;
-use super::{Experiment, Meta, RunOptions, Table, command_line, mean, wilson};
+use super::{Experiment, Meta, PLANNER_FILE, RunOptions, Table, command_line, mean, wilson};
 use crate::seeds::splitmix;
 
 /// The four locomotion forms, as instruction verbs.
@@ -90,7 +89,7 @@ pub fn tour(scene: &Scene, scene_seed: u64) -> anyhow::Result<String> {
 /// again and again at one spot counts once among the tours).
 /// How to watch one tour again: `plamo run` on the scene by its name, with the tour's
 /// instructions, seed and time limit, gives the same trajectory as the eval's run.
-fn replay_note(runs: &Table, meta: &Meta) -> anyhow::Result<String> {
+fn replay_note(runs: &Table, meta: &Meta, out: &Path) -> anyhow::Result<String> {
     let Some(r) =
         (0..runs.rows.len()).find(|&r| runs.str(r, "cause").is_ok_and(|c| c != "success"))
     else {
@@ -101,6 +100,11 @@ fn replay_note(runs: &Table, meta: &Meta) -> anyhow::Result<String> {
         Some(m) => m,
         None => TIME_LIMIT_FACTOR * runs.f64(r, "planned_time")? + TIME_LIMIT_EXTRA,
     };
+    let planner = if meta.planner.is_some() {
+        format!(" --planner-params {}", out.join(PLANNER_FILE).display())
+    } else {
+        String::new()
+    };
     Ok(format!(
         "\n\nEvery tour replays exactly, with its trajectory, plots and replay files, as \
          `plamo run --scene random-<scene_seed> --instructions \"<instructions>\" --physics \
@@ -108,7 +112,7 @@ fn replay_note(runs: &Table, meta: &Meta) -> anyhow::Result<String> {
          digest is runs.csv's `digest`), where the time limit is {TIME_LIMIT_FACTOR} x the planned time + {TIME_LIMIT_EXTRA} s unless \
          `--max-seconds` was given. The first tour that failed ({cause}):\n\n\
          ```\nplamo run --scene random-{seed} --instructions \"{text}\" --physics {physics} \
-         --seed {seed} --max-seconds {limit} --out random-{seed}\n```\n",
+         --seed {seed} --max-seconds {limit}{planner} --out random-{seed}\n```\n",
         physics = meta.physics,
         cause = runs.str(r, "cause")?,
         text = runs.str(r, "instructions")?,
@@ -221,7 +225,7 @@ impl Experiment for RandomScenes {
             instructions: text.clone(),
             backend: opts.physics,
             seed: scene_seed,
-            planner: PlannerSettings::default(),
+            planner: opts.planner(),
             max_seconds: opts.max_seconds,
         })?;
         let finished = ep.reached == ep.instructions;
@@ -345,7 +349,7 @@ impl Experiment for RandomScenes {
             mean(&xy),
             mean(&z),
             fall_table(runs)?,
-            replay_note(runs, meta)?,
+            replay_note(runs, meta, out)?,
         ));
         let mut csv = Table {
             header: ["outcome", "runs", "share", "wilson95_low", "wilson95_high"]

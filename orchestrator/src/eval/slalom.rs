@@ -151,22 +151,22 @@ impl Point {
         }
     }
 
-    /// The planner settings of this point.
-    pub fn settings(&self) -> PlannerSettings {
+    /// The planner settings of this point, on top of `base`.
+    pub fn settings(&self, base: PlannerSettings) -> PlannerSettings {
         match *self {
             Point::Constant(v) => PlannerSettings {
                 run_speed: v,
                 a_lat: UNLIMITED_ACCELERATION,
                 a_max: UNLIMITED_ACCELERATION,
                 a_min: -UNLIMITED_ACCELERATION,
-                ..Default::default()
+                ..base
             },
             Point::Qp(q) => PlannerSettings {
                 run_speed: q.v_max,
                 a_lat: q.a_lat,
                 a_max: q.a_max,
                 a_min: q.a_min,
-                ..Default::default()
+                ..base
             },
         }
     }
@@ -231,7 +231,7 @@ impl Slalom {
                 instructions: INSTRUCTION.into(),
                 backend: plamo_physics::BackendKind::Rapier,
                 seed: self.seed,
-                planner: q.settings(),
+                planner: q.settings(meta.planner()),
                 max_seconds: None,
             };
             if let Ok((_, p)) = plan(&spec) {
@@ -339,7 +339,7 @@ impl Experiment for Slalom {
             instructions: INSTRUCTION.into(),
             backend: opts.physics,
             seed,
-            planner: point.settings(),
+            planner: point.settings(opts.planner()),
             max_seconds: opts.max_seconds,
         })?;
         let (kind, v, a_lat, a_max) = match point {
