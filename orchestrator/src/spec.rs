@@ -9,13 +9,15 @@ use plamo_controller::{
 };
 use plamo_physics::{BackendKind, PhysicsComponent, PhysicsSettings, Placement};
 use plamo_planner::{Planner, PlannerComponent, PlannerSettings, Source, parse_instructions};
-use plamo_scenes::Scene;
+use plamo_scenes::{Region, Scene};
 
-use crate::lockstep::{InProcess, Links, RunError};
+use crate::lockstep::{InProcess, Links, RunError, stands_clear};
 use crate::seeds::splitmix;
 
 /// Largest start-heading perturbation drawn from the seed \[rad\].
 pub const SEED_YAW_JITTER: f64 = 0.05;
+/// Spacing of the rings searched for a start where a standing body fits \[m\].
+const START_SEARCH_STEP: f64 = 0.1;
 
 /// Everything that decides a run's result.
 #[derive(Debug, Clone, PartialEq)]
@@ -58,6 +60,32 @@ pub fn load_planner_settings(path: &Path) -> Result<PlannerSettings, String> {
     Ok(settings)
 }
 
+/// Where a humanoid starts in `region`: its centre, or where the centre has no room
+/// to stand (a low top over it, a wall beside it) the nearest spot of the region
+/// that has, searched on rings [`START_SEARCH_STEP`] apart. A body spawned standing
+/// into a ceiling is thrown out of it by the physics at several m/s. The centre if
+/// no spot of the region fits.
+fn start_spot(scene: &Scene, region: &Region) -> [f64; 2] {
+    let c = region.center();
+    if stands_clear(scene, c[0], c[1]) {
+        return c;
+    }
+    let (lo, hi) = region.aabb();
+    let reach = (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
+    let rings = (reach / START_SEARCH_STEP).ceil() as usize;
+    (1..=rings)
+        .flat_map(|r| {
+            let d = r as f64 * START_SEARCH_STEP;
+            let n = 8 * r;
+            (0..n).map(move |k| {
+                let a = std::f64::consts::TAU * k as f64 / n as f64;
+                [c[0] + d * a.cos(), c[1] + d * a.sin()]
+            })
+        })
+        .find(|p| region.contains(p[0], p[1]) && stands_clear(scene, p[0], p[1]))
+        .unwrap_or(c)
+}
+
 fn setup(e: impl std::fmt::Display) -> RunError {
     RunError::Setup(e.to_string())
 }
@@ -73,7 +101,8 @@ impl RunSpec {
         plamo_scenes::resolve(&self.scene).map_err(setup)
     }
 
-    /// Where agent `k` starts: the centre of its first instruction's source landmark,
+    /// Where agent `k` starts: the centre of its first instruction's source landmark
+    /// (or the spot of it nearest the centre with room to stand, see [`start_spot`]),
     /// facing its first target, heading perturbed by the seed.
     pub fn placement(&self, scene: &Scene, k: usize) -> Result<Placement, RunError> {
         let parsed = parse_instructions(&self.instructions[k], scene).map_err(setup)?;
@@ -92,7 +121,10 @@ impl RunSpec {
                 .map(|l| l.region.center())
                 .ok_or_else(|| RunError::Setup(format!("no landmark `{n}`")))
         };
-        let [x, y] = at(name)?;
+        let source = scene
+            .landmark(name)
+            .ok_or_else(|| RunError::Setup(format!("no landmark `{name}`")))?;
+        let [x, y] = start_spot(scene, &source.region);
         let [tx, ty] = at(&first.target)?;
         let r = splitmix(&mut (self.seed ^ splitmix(&mut (k as u64))));
         let unit = (r >> 11) as f64 / (1u64 << 53) as f64;
@@ -230,5 +262,64 @@ impl RunSpec {
             }
         }
         a
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Start landmark `a` (x 2.8..5.2) and target `b`.
+    const OPEN: &str = r#"
+name = "low-start"
+[terrain]
+size = [12.0, 8.0]
+[[landmarks]]
+name = "a"
+region = { kind = "circle", center = [4.0, 4.0], radius = 1.2 }
+[[landmarks]]
+name = "b"
+region = { kind = "circle", center = [10.0, 4.0], radius = 1.0 }
+"#;
+    /// A 1.2 m ceiling over the east half of `a` (x >= 4).
+    const ROOF: &str = r#"
+[[tops]]
+name = "roof"
+center = [5.5, 4.0]
+size = [3.0, 4.0]
+clearance = 1.2
+thickness = 0.2
+"#;
+
+    fn start(toml: &str) -> (Scene, Placement) {
+        let scene = plamo_scenes::from_toml_str(toml, "low-start").unwrap();
+        let spec = RunSpec {
+            scene: "low-start".into(),
+            instructions: vec!["Walk from the a to the b".into()],
+            backend: BackendKind::Rapier,
+            seed: 0,
+            params: ParamFiles::default(),
+        };
+        let p = spec.placement(&scene, 0).unwrap();
+        (scene, p)
+    }
+
+    #[test]
+    fn a_start_under_a_low_top_moves_to_where_the_body_can_stand() {
+        let (_, p) = start(OPEN);
+        assert_eq!([p.x, p.y], [4.0, 4.0]);
+        let (scene, p) = start(&format!("{OPEN}{ROOF}"));
+        let region = &scene.landmark("a").unwrap().region;
+        assert!(
+            region.contains(p.x, p.y),
+            "({}, {}) left the landmark",
+            p.x,
+            p.y
+        );
+        assert!(stands_clear(&scene, p.x, p.y), "({}, {})", p.x, p.y);
+        // Near the centre: the body's 0.3 m radius west of the roof's edge at x 4,
+        // within a search step.
+        let d = (p.x - 4.0).hypot(p.y - 4.0);
+        assert!(p.x <= 3.7 + 1e-9 && d <= 0.4 + 1e-9, "({}, {})", p.x, p.y);
     }
 }

@@ -31,6 +31,7 @@ use plamo_scenes::Scene;
 pub use digest::Digest;
 pub use error::RunError;
 pub use link::{InProcess, Link};
+pub(crate) use recover::stands_clear;
 pub use sense::InstructionReport;
 
 use sense::AgentTracker;

@@ -193,6 +193,12 @@ fn clear(scene: &Scene, x: f64, y: f64, yaw: f64, form: u32) -> bool {
     })
 }
 
+/// Whether a standing body fits with its root at (x, y): on the terrain, clear of
+/// walls, and under every top with room to stand.
+pub(crate) fn stands_clear(scene: &Scene, x: f64, y: f64) -> bool {
+    clear(scene, x, y, 0.0, RESET_STAND)
+}
+
 /// The form and root place for a plan point: a crawl puts its head on the point.
 /// Standing where the plan stands unless a top leaves no room; `None` if neither
 /// form fits.
