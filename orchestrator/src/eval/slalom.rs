@@ -8,6 +8,7 @@
 use std::path::Path;
 
 use anyhow::bail;
+use plamo_interfaces::CONTROL_DT;
 use plamo_planner::PlannerSettings;
 use plotters::style::RGBColor;
 use serde::{Deserialize, Serialize};
@@ -399,7 +400,9 @@ impl Experiment for Slalom {
                     times.push(runs.f64(r, "time_s")?);
                 }
                 s.falls += runs.usize(r, "falls")?;
-                s.wall_runs += usize::from(runs.usize(r, "wall_contact_steps")? > 0);
+                let contact = runs.usize(r, "wall_contact_steps")?;
+                s.wall_runs += usize::from(contact > 0);
+                s.wall_steps += contact;
                 disp.push(runs.f64(r, "disp_err")?);
                 xy.push(runs.f64(r, "xy_err")?);
                 z.push(runs.f64(r, "z_err")?);
@@ -432,6 +435,7 @@ impl Experiment for Slalom {
                 "z_err_mean",
                 "falls_per_run",
                 "wall_contact_run_rate",
+                "wall_contact_s_per_run",
                 "planned_time_s",
                 "planned_length_m",
                 "pareto_failure_time",
@@ -460,9 +464,11 @@ impl Experiment for Slalom {
             "Command: `{}`\n\n\
              Scene `slalom`, \"{INSTRUCTION}\", {} runs per point. Success: the finish reached \
              without a fall. Time: mean over runs that reached the finish. 3D error: hypot of \
-             the mean head XY and Z errors against the plan. Planned: the planner's own route \
+             the mean head XY and Z errors against the plan. Wall contact: the share of runs \
+             in which some body touched a wall, and the mean time of contact per run (a hand \
+             brushing a wall's end in a turn counts). Planned: the planner's own route \
              (planner only).\n\n\
-             | point | success | reached | time [s] | 3D err [m] | XY / Z err [m] | falls/run | wall contact | planned time [s] | planned length [m] | Pareto (fail, err) |\n\
+             | point | success | reached | time [s] | 3D err [m] | XY / Z err [m] | falls/run | wall contact: runs, s/run | planned time [s] | planned length [m] | Pareto (fail, err) |\n\
              |---|---|---|---|---|---|---|---|---|---|---|\n",
             command_line(meta, &args),
             self.runs
@@ -471,7 +477,7 @@ impl Experiment for Slalom {
             let n = s.runs.max(1) as f64;
             let yn = |b: bool| if b { "yes" } else { "no" };
             md.push_str(&format!(
-                "| {} | {:.0}% | {:.0}% | {} | {:.2} | {:.2} / {:.2} | {:.1} | {:.0}% | {:.1} | {:.1} | {}, {} |\n",
+                "| {} | {:.0}% | {:.0}% | {} | {:.2} | {:.2} / {:.2} | {:.1} | {:.0}%, {:.1} | {:.1} | {:.1} | {}, {} |\n",
                 s.label,
                 100.0 * s.successes as f64 / n,
                 100.0 * s.reached as f64 / n,
@@ -485,6 +491,7 @@ impl Experiment for Slalom {
                 s.z,
                 s.falls as f64 / n,
                 100.0 * s.wall_runs as f64 / n,
+                s.wall_steps as f64 * CONTROL_DT / n,
                 s.planned_time,
                 s.planned_length,
                 yn(pareto_fail[k]),
@@ -503,6 +510,7 @@ impl Experiment for Slalom {
                 format!("{:.4}", s.z),
                 format!("{:.3}", s.falls as f64 / n),
                 format!("{:.4}", s.wall_runs as f64 / n),
+                format!("{:.3}", s.wall_steps as f64 * CONTROL_DT / n),
                 format!("{:.3}", s.planned_time),
                 format!("{:.3}", s.planned_length),
                 u8::from(pareto_fail[k]).to_string(),
@@ -584,6 +592,8 @@ struct PointStats {
     reached: usize,
     falls: usize,
     wall_runs: usize,
+    /// Control steps with a wall touched, over all runs.
+    wall_steps: usize,
     time: f64,
     disp: f64,
     xy: f64,
