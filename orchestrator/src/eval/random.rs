@@ -121,15 +121,18 @@ fn replay_note(runs: &Table, meta: &Meta, out: &Path) -> anyhow::Result<String> 
 
 fn fall_table(runs: &Table) -> anyhow::Result<String> {
     let grounds = GroundKind::ALL;
-    let mut tours = BTreeMap::<(&str, GroundKind), (usize, usize)>::new();
+    // Per form and ground: tours with a fall there, falls, tours whose first fall
+    // (the one that failed the tour) was there.
+    let mut tours = BTreeMap::<(&str, GroundKind), (usize, usize, usize)>::new();
     // The tour's four forms, and a sprint where merged rows came from elsewhere.
     let known = [FORMS[0], FORMS[1], FORMS[2], FORMS[3], "sprint"];
     for r in 0..runs.rows.len() {
         let mut seen = BTreeSet::new();
-        for site in runs
+        for (k, site) in runs
             .str(r, "fall_sites")?
             .split(';')
             .filter(|s| !s.is_empty())
+            .enumerate()
         {
             let (form, ground) = site
                 .split_once('@')
@@ -146,11 +149,15 @@ fn fall_table(runs: &Table) -> anyhow::Result<String> {
             if seen.insert((form, ground)) {
                 e.0 += 1;
             }
+            if k == 0 {
+                e.2 += 1;
+            }
         }
     }
     let mut md = String::from(
-        "Where the tours fell: tours with a fall in that form on that ground (falls in \
-         brackets); the ground is judged from the height map under the root \
+        "Where the tours fell: tours with a fall in that form on that ground, (falls), and \
+         [tours whose first fall, the one that failed the tour, was there]; the form is the \
+         plan's, the ground is judged from the height map under the root \
          (`eval::ground`).\n\n| form |",
     );
     for g in grounds {
@@ -165,8 +172,8 @@ fn fall_table(runs: &Table) -> anyhow::Result<String> {
     for f in shown {
         md.push_str(&format!("| {f} |"));
         for g in grounds {
-            let (t, n) = tours.get(&(f, g)).copied().unwrap_or_default();
-            md.push_str(&format!(" {t} ({n}) |"));
+            let (t, n, first) = tours.get(&(f, g)).copied().unwrap_or_default();
+            md.push_str(&format!(" {t} ({n}) [{first}] |"));
         }
         md.push('\n');
     }
@@ -395,5 +402,39 @@ impl Experiment for RandomScenes {
             1.0,
         )?;
         Ok(md)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cell<'a>(md: &'a str, form: &str, ground: GroundKind) -> &'a str {
+        let col = GroundKind::ALL.iter().position(|g| *g == ground).unwrap() + 2;
+        let row = md
+            .lines()
+            .find(|l| l.starts_with(&format!("| {form} |")))
+            .unwrap();
+        row.split('|').nth(col).unwrap().trim()
+    }
+
+    #[test]
+    fn the_fall_table_counts_tours_falls_and_first_falls() {
+        let runs = Table {
+            header: vec!["job".into(), "fall_sites".into()],
+            rows: [
+                "crawl@stairs;walk@flat;crawl@stairs",
+                "walk@flat;crawl@stairs",
+                "",
+            ]
+            .iter()
+            .enumerate()
+            .map(|(k, s)| vec![k.to_string(), s.to_string()])
+            .collect(),
+        };
+        let md = fall_table(&runs).unwrap();
+        assert_eq!(cell(&md, "crawl", GroundKind::Stairs), "2 (3) [1]", "{md}");
+        assert_eq!(cell(&md, "walk", GroundKind::Flat), "2 (2) [1]", "{md}");
+        assert_eq!(cell(&md, "run", GroundKind::Slope), "0 (0) [0]", "{md}");
     }
 }
