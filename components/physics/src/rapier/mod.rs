@@ -47,6 +47,16 @@ impl RapierBackend {
         world.gravity = Vector::new(0.0, 0.0, -settings.gravity as f32);
         world.integration_parameters.dt = PHYSICS_DT as f32;
         world.integration_parameters.num_solver_iterations = settings.rapier_solver_iterations;
+        // One compliance for every contact, as MuJoCo has one `solref` (see the setting).
+        let hz = settings.rapier_contact_hz as f32;
+        world
+            .integration_parameters
+            .contact_softness
+            .natural_frequency = hz;
+        world
+            .integration_parameters
+            .static_contact_softness
+            .natural_frequency = hz;
         let handles = world::build_scene(&mut world, scene, settings)?;
         let mut humanoids = Vec::with_capacity(settings.humanoids);
         for i in 0..settings.humanoids {
