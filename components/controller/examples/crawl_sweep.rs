@@ -3,14 +3,16 @@
 //! part of it.
 //!
 //! `cargo run --release -p plamo-controller --features mujoco --example crawl_sweep --
-//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc|drop|rise|turn|trace]
+//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc|drop|rise|crouch|turn|trace]
 //! [terrains: flat,slope,rough,stairs,ceiling]` (the sloped, rough and stair strips
 //! are the builtin `terrain-*` scenes `plamo eval locomotion` uses, from x 5, y 3;
-//! `ceiling` is flat with the crawl suite's 0.6 m ceiling). `drop`: the plan walks at
+//! `ceiling` is flat with the crawl suite's 0.6 m ceiling; `stairs@A`: 0.12 m x 0.42 m
+//! stairs rising towards A degrees from the path, from x 5, y 6). `drop`: the plan walks at
 //! the given speed (head 1.47 m, from rest at 1 m/s^2) and drops to the crawl's head
 //! height and 1 m/s at 4 s, the get-down from a walk. `rise`: straight, the plan rises
 //! to a standing head at 5 s (the get-up; a crawler still down counts as fallen).
-//! `turn`: the plan crawls off at a right angle to the standing body's heading (left
+//! `crouch`: straight, the plan rises to a crouch-walk's 0.8 m head at 5 s (the fall
+//! rule's bar is the crouch-walk's 0.3 m throughout). `turn`: the plan crawls off at a right angle to the standing body's heading (left
 //! in even runs, right in odd ones), as where a walk leg ends at a landmark and the
 //! crawl leg heads elsewhere. `PLAMO_SWEEP_HOLD=S`: the plan
 //! waits S seconds (straight paths), moving its point at rest to where the crawl's
@@ -44,6 +46,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let drop = arg(5, "straight") == "drop";
     let rise = arg(5, "straight") == "rise";
     let turn = arg(5, "straight") == "turn";
+    let crouch = arg(5, "straight") == "crouch";
     let settings = ControllerSettings {
         body_mass: plamo_physics::humanoid::total_mass(),
         ..Default::default()
@@ -79,6 +82,8 @@ fn main() -> Result<(), Box<dyn Error>> {
                             (flat_scene(speed * duration + 10.0), [0.0, 0.0])
                         } else if terrain == "ceiling" {
                             (ceiling_scene(speed * duration + 10.0), [0.0, 0.0])
+                        } else if let Some(angle) = terrain.strip_prefix("stairs@") {
+                            (oblique_stairs(angle.parse().unwrap()), [5.0, 6.0])
                         } else {
                             (
                                 plamo_scenes::builtin(&format!("terrain-{terrain}")).unwrap(),
@@ -96,6 +101,15 @@ fn main() -> Result<(), Box<dyn Error>> {
                             })
                         } else if rise {
                             Box::new(RisingPath {
+                                line: StraightPath {
+                                    start,
+                                    speed,
+                                    head_height: head,
+                                },
+                                up_at: 5.0,
+                            })
+                        } else if crouch {
+                            Box::new(CrouchPath {
                                 line: StraightPath {
                                     start,
                                     speed,
@@ -159,6 +173,20 @@ fn main() -> Result<(), Box<dyn Error>> {
     Ok(())
 }
 
+/// Stairs (0.12 m x 0.42 m, the random scenes' steps) rising towards `angle` degrees
+/// from +X, the straight paths' direction: a path across them at an angle has one
+/// side of the body a tread above the other.
+fn oblique_stairs(angle: f64) -> plamo_scenes::Scene {
+    let text = format!(
+        "name = \"stairs-at-{angle}\"\ndescription = \"stairs crossed at {angle} degrees\"\n\
+         [terrain]\nsize = [40.0, 12.0]\n[[terrain.tiles]]\n\
+         area = {{ min = [0.0, 0.0], max = [40.0, 12.0] }}\n\
+         generator = {{ kind = \"stairs\", step_height = 0.12, step_depth = 0.42, \
+         direction_deg = {angle}, symmetric = true }}\n"
+    );
+    plamo_scenes::from_toml_str(&text, "oblique stairs").unwrap()
+}
+
 /// A straight plan that waits `hold` seconds at its start, moving its point (at rest)
 /// to where the crawl's head ends after the get-down.
 struct HeldPath {
@@ -184,6 +212,30 @@ impl HeadPath for HeldPath {
     }
     fn head_height(&self) -> f64 {
         self.line.head_height
+    }
+}
+
+/// A straight crawl plan whose head rises to a crouch-walk's 0.8 m at `up_at`: a
+/// crawl leg followed by a crouch-walk leg. The fall rule holds the head to the
+/// crouch-walk's bar (0.8 - 0.5 m) throughout, the crawl part included.
+struct CrouchPath {
+    line: StraightPath,
+    up_at: f64,
+}
+
+impl HeadPath for CrouchPath {
+    fn point(&self, scene: &plamo_scenes::Scene, t: f64) -> plamo_controller::Waypoint {
+        let mut w = self.line.at(scene, t);
+        if t >= self.up_at {
+            w.z += 0.8 - self.line.head_height;
+        }
+        w
+    }
+    fn direction(&self, _t: f64) -> [f64; 2] {
+        [1.0, 0.0]
+    }
+    fn head_height(&self) -> f64 {
+        0.8
     }
 }
 
@@ -290,6 +342,7 @@ fn trace(
         ModelBasedController::with_all_params(GaitParams::default(), crawl, settings.clone())?;
     let (scene, origin) = match std::env::var("PLAMO_TRACE_TERRAIN") {
         Ok(t) if t == "ceiling" => (ceiling_scene(speed * duration + 10.0), [0.0, 0.0]),
+        Ok(t) if t.starts_with("stairs@") => (oblique_stairs(t[7..].parse()?), [5.0, 6.0]),
         Ok(t) if t != "flat" => (plamo_scenes::builtin(&format!("terrain-{t}"))?, [5.0, 3.0]),
         _ => (flat_scene(speed * duration + 10.0), [0.0, 0.0]),
     };

@@ -265,6 +265,47 @@ pub fn stands_up_when_the_plan_rises(kind: BackendKind) {
     assert!(head > 1.2, "{kind}: head {head} m after getting up");
 }
 
+/// A plan that crawls (head 0.4 m) and at `up_at` goes on as a crouch-walk (head
+/// 0.8 m), both at `SPEED`: the random tours' crawl leg followed by a crouch-walk leg.
+struct CrouchAfterCrawl {
+    up_at: f64,
+}
+
+impl HeadPath for CrouchAfterCrawl {
+    fn point(&self, scene: &plamo_scenes::Scene, t: f64) -> Waypoint {
+        let x = SPEED * t.max(0.0);
+        let head = if t < self.up_at { 0.4 } else { 0.8 };
+        Waypoint {
+            x,
+            y: 0.0,
+            z: scene.height_at(x, 0.0) + head,
+            v: SPEED,
+        }
+    }
+    fn direction(&self, _t: f64) -> [f64; 2] {
+        [1.0, 0.0]
+    }
+    fn head_height(&self) -> f64 {
+        0.4
+    }
+}
+
+pub fn stands_up_into_a_crouch_walk(kind: BackendKind) {
+    // Before `crouch_stand_above` the crawl stood up only for a plan above 1.1 m and
+    // crawled the crouch-walk leg with its head at ~0.35 m, where the fall rule's bar
+    // is 0.8 - 0.5 m.
+    let settings = settings();
+    let scene = flat_scene(12.0);
+    let mut policy = ModelBasedController::new(settings.clone()).unwrap();
+    let path = CrouchAfterCrawl { up_at: 6.0 };
+    let m = run_path(kind, &scene, &path, 13.0, &mut policy, &settings).unwrap();
+    assert_eq!(m.falls, 0, "{kind}: fell");
+    assert!(
+        !policy.is_crawling(),
+        "{kind}: still crawling 7 s into the crouch-walk"
+    );
+}
+
 pub fn crawls_under_a_0_6_m_ceiling(kind: BackendKind) {
     // The back must clear the ceiling: a crawl whose back scrapes it is held by the
     // friction (the playground's tunnel stopped the taller crawl for 80 s).
@@ -423,6 +464,10 @@ macro_rules! crawl_suite {
             #[test]
             fn stands_up_when_the_plan_rises() {
                 super::stands_up_when_the_plan_rises($kind);
+            }
+            #[test]
+            fn stands_up_into_a_crouch_walk() {
+                super::stands_up_into_a_crouch_walk($kind);
             }
             #[test]
             fn crawls_under_a_0_6_m_ceiling() {

@@ -183,6 +183,16 @@ pub struct CrawlParams {
     pub rot_damping: f64,
     /// Residual yaw torque per rad of heading error \[N m/rad\].
     pub yaw_torque_gain: f64,
+    /// Requested head height above which a crawler stands up into a crouch-walk
+    /// where the plan stays at least this high for its 10 waypoints (5 s) \[m\]
+    /// (above `stand_above`: never; then only `stand_above` stands it up).
+    #[serde(default = "never")]
+    pub crouch_stand_above: f64,
+}
+
+/// `crouch_stand_above` of a parameter file without it: never, the crawl as it was.
+fn never() -> f64 {
+    4.0
 }
 
 impl Default for CrawlParams {
@@ -220,7 +230,8 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 53] = [
+        let ranges: [(&'static str, f64, f64, f64); 54] = [
+            ("crouch_stand_above", self.crouch_stand_above, 0.2, 4.0),
             ("max_side_speed", self.max_side_speed, 0.0, 5.0),
             ("up_squat_hip", self.up_squat_hip, -2.4, 0.6),
             ("up_squat_knee", self.up_squat_knee, 0.0, 2.7),

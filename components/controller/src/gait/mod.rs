@@ -4,7 +4,9 @@
 //! [`biped`] walks, runs and crouch-walks (its parameters blended continuously);
 //! [`crawl`] goes down on hands and knees when the plan's head height drops below
 //! [`CrawlParams::crawl_below`] and stands up again above
-//! [`CrawlParams::stand_above`] (hysteresis), handing the biped a reset state.
+//! [`CrawlParams::stand_above`] (hysteresis), or for a crouch-walk above
+//! [`CrawlParams::crouch_stand_above`] that the plan keeps for 5 s, handing the biped
+//! a reset state.
 
 mod biped;
 mod crawl;
@@ -142,6 +144,21 @@ impl ModelBasedController {
         self.biped.params()
     }
 
+    /// Whether a crawler may stand up into a crouch-walk: the plan asks for at least
+    /// `crouch_stand_above` at every waypoint (5 s ahead: no crawl coming, under a
+    /// ceiling or otherwise; the planner puts the head below `crawl_below` wherever a
+    /// top is too low for a crouch). A crawl on a crouch-walk leg kept its head at
+    /// ~0.35 m against the fall rule's bar of 0.8 - 0.5 m, so a dip on stairs counted
+    /// as a fall, and the user had asked for a crouch-walk.
+    fn crouch_ahead(&self, obs: &Observation) -> bool {
+        let p = self.crawl.params();
+        let head = obs.root_height + obs.head_pos[2];
+        obs.waypoints
+            .iter()
+            .zip(&obs.waypoint_ground)
+            .all(|(w, g)| head + w[2] - g >= p.crouch_stand_above)
+    }
+
     /// The residual wrench of the last action (world frame).
     pub fn last_wrench(&self) -> RootWrench {
         if self.crawling {
@@ -195,7 +212,10 @@ impl Policy for ModelBasedController {
                 if requested < below {
                     self.crawl.begin_down(obs);
                 }
-            } else if requested > above && self.crawl.settled() && plan_lead(obs) < MAX_STAND_LAG {
+            } else if self.crawl.settled()
+                && plan_lead(obs) < MAX_STAND_LAG
+                && (requested > above || self.crouch_ahead(obs))
+            {
                 self.crawl.begin_up(obs);
             }
         }
