@@ -239,3 +239,44 @@ fn pushed_standing_sway_agrees_across_backends() {
         );
     }
 }
+
+/// Foot contact flags over the first `steps` steps of a humanoid released with its
+/// soles `gap` above flat ground.
+fn foot_contacts(kind: BackendKind, gap: f64, steps: usize) -> Vec<bool> {
+    let mut b = create_backend(kind, &common::flat(), &PhysicsSettings::default()).unwrap();
+    // `standing` leaves 2 mm between the soles and `ground_z`.
+    b.reset(&HumanoidPose::standing(0.0, 0.0, gap - 0.002, 0.0))
+        .unwrap();
+    (0..steps)
+        .map(|_| {
+            b.set_action(&[0.0; plamo_physics::NUM_JOINTS], None)
+                .unwrap();
+            b.step().unwrap();
+            let s = b.state();
+            plamo_physics::FEET.iter().any(|&f| s.terrain_contact[f])
+        })
+        .collect()
+}
+
+/// Contact flags mean touching in both engines: rapier's solver also carries
+/// speculative contacts up to 2 cm apart, and reporting those made a foot 1 cm above
+/// the ground (or a hand near a wall) count as touching in rapier only. Released 1 cm
+/// above the ground the feet fall for ~45 ms before they land: neither engine may
+/// report contact in the first 3 steps (25 ms), both must once the humanoid stands
+/// (from 0.5 s on).
+#[test]
+fn contact_flags_agree_across_backends() {
+    for kind in [BackendKind::Mujoco, BackendKind::Rapier] {
+        let c = foot_contacts(kind, 0.01, 120);
+        let first = c.iter().position(|&x| x);
+        println!("{kind:?}: feet released 1 cm up first touch at step {first:?}");
+        assert!(
+            c[..3].iter().all(|&x| !x),
+            "{kind:?}: contact before touching"
+        );
+        assert!(
+            c[60..].iter().all(|&x| x),
+            "{kind:?}: standing without contact"
+        );
+    }
+}

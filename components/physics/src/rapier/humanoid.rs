@@ -290,7 +290,10 @@ impl RapierHumanoid {
         out.terrain_contact = [false; NUM_BODIES];
         for &(c, bi) in &self.colliders {
             for pair in world.narrow_phase.contact_pairs_with(c) {
-                if pair.has_any_active_contact() {
+                // rapier's active contacts include speculative ones up to its prediction
+                // distance (2 cm) away; MuJoCo reports touching geoms only. Touching is
+                // where the solver pushed (`contact_flags_agree_across_backends`).
+                if pair.has_any_active_contact() && pair.total_impulse_magnitude() > 0.0 {
                     out.contact[bi] = true;
                     if pair.collider1 == terrain || pair.collider2 == terrain {
                         out.terrain_contact[bi] = true;
