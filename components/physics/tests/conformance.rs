@@ -500,4 +500,17 @@ fn invalid_settings_are_rejected() {
             ..
         })
     ));
+    for hz in [0.0, f64::NAN, 5000.0] {
+        let s = PhysicsSettings {
+            rapier_contact_hz: hz,
+            ..PhysicsSettings::default()
+        };
+        assert!(matches!(
+            create_backend(BackendKind::Rapier, &common::flat(), &s),
+            Err(PhysicsError::InvalidSettings {
+                field: "rapier_contact_hz",
+                ..
+            })
+        ));
+    }
 }
