@@ -63,6 +63,34 @@ pub struct PlanGrid {
     pub climb_cost_lower_bound: f64,
 }
 
+/// Whether terrain sampled `step` \[m\] apart along a line (`heights`, half
+/// `slope_baseline` long) is steeper than `max_slope` (`tan_max_slope` = its tangent)
+/// once its largest single step is taken out: a stair's riser or a ledge (which the
+/// per-edge rule lets through up to `max_step_height`) between level ground leaves
+/// the window level, a hillside that rises at every sample does not. Fewer than three
+/// samples are never too steep (the per-edge rule alone judges them).
+#[inline]
+pub(crate) fn too_steep(tan_max_slope: f64, heights: impl Iterator<Item = f64>, step: f64) -> bool {
+    let (mut first, mut last, mut n) = (0.0, 0.0, 0usize);
+    let (mut up, mut down) = (0.0f64, 0.0f64);
+    for h in heights {
+        if n == 0 {
+            first = h;
+        } else {
+            up = up.max(h - last);
+            down = down.min(h - last);
+        }
+        last = h;
+        n += 1;
+    }
+    if n < 3 {
+        return false;
+    }
+    let rise = last - first;
+    let rest = if rise >= 0.0 { rise - up } else { rise - down };
+    rest.abs() > tan_max_slope * (n - 2) as f64 * step
+}
+
 /// Cost of one edge: 3D length + height cost + terrain preference (paper 5.2).
 /// `None` when the slope is infeasible.
 pub(crate) fn edge_cost(s: &PlannerSettings, dxy: f64, dh: f64) -> Option<f64> {
@@ -268,6 +296,10 @@ impl PlanGrid {
         let tan_max_slope = s.max_slope.tan();
         for (d, &(di, dj)) in DIRS[..4].iter().enumerate() {
             let dxy = res * ((di * di + dj * dj) as f64).sqrt();
+            // The slope is measured over two windows of half `slope_baseline` each, one
+            // ending with the edge and one starting with it (one window over the
+            // whole baseline reads a ridge crossed within it as level): `w` cells each.
+            let w = ((0.5 * s.slope_baseline / dxy).round() as isize).max(1);
             for j in 0..ny {
                 let j2 = j as isize + dj;
                 if j2 < 0 || j2 >= ny as isize {
@@ -290,6 +322,22 @@ impl PlanGrid {
                         if !free[c1] || !free[c2] {
                             continue;
                         }
+                    }
+                    // The heights of cells `k0..=k1` steps along the edge from `a`
+                    // (clamped to the grid).
+                    let height = &height;
+                    let line = |k0: isize, k1: isize| {
+                        (k0..=k1).map(move |k| {
+                            let ci = (i as isize + k * di).clamp(0, nx as isize - 1) as usize;
+                            let cj = (j as isize + k * dj).clamp(0, ny as isize - 1) as usize;
+                            height[cj * nx + ci]
+                        })
+                    };
+                    if s.slope_baseline > 0.0
+                        && (too_steep(tan_max_slope, line(1 - w, 1), dxy)
+                            || too_steep(tan_max_slope, line(0, w), dxy))
+                    {
+                        continue;
                     }
                     if let Some(w) = edge_cost_with(s, tan_max_slope, dxy, height[b] - height[a]) {
                         edges[a][d] = w as f32;

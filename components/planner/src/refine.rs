@@ -6,7 +6,7 @@ use plamo_scenes::Scene;
 use serde::{Deserialize, Serialize};
 
 use crate::astar::{CrawlBody, GridPath, SearchLimits};
-use crate::grid::{PlanGrid, crawl_body_clear, edge_cost};
+use crate::grid::{PlanGrid, crawl_body_clear, edge_cost, too_steep};
 use crate::{Locomotion, PlannerSettings};
 
 /// One point of a refined, timed path.
@@ -82,6 +82,28 @@ impl RefineCtx<'_> {
         !applies || crawl_body_clear(self.scene, self.settings, x, y, heading)
     }
 
+    /// Whether the terrain at (x, y), heading `heading` \[rad\], is no steeper than
+    /// `max_slope` over half `slope_baseline` behind and ahead, as the grid's edges
+    /// (see `PlanGrid::build`).
+    fn slope_ok(&self, x: f64, y: f64, heading: f64) -> bool {
+        if self.settings.slope_baseline == 0.0 {
+            return true;
+        }
+        let (sin, cos) = heading.sin_cos();
+        let half = 0.5 * self.settings.slope_baseline;
+        let m = (half / self.grid.resolution).round().max(1.0) as i32;
+        let step = half / m as f64;
+        let tan_max_slope = self.settings.max_slope.tan();
+        // Samples from `k0` to `k1` steps along the heading from (x, y).
+        let line = |k0: i32, k1: i32| {
+            (k0..=k1).map(move |k| {
+                let d = k as f64 * step;
+                self.scene.height_at(x + d * cos, y + d * sin)
+            })
+        };
+        !too_steep(tan_max_slope, line(-m, 0), step) && !too_steep(tan_max_slope, line(0, m), step)
+    }
+
     /// Extra cost per metre of crawling over uneven ground at (x, y) (see
     /// [`PlannerSettings::crawl_relief_cost`]), 0 where the character walks.
     fn relief_at(&self, x: f64, y: f64) -> f64 {
@@ -119,7 +141,8 @@ impl RefineCtx<'_> {
             let f = k as f64 / n as f64;
             let x = a[0] + (b[0] - a[0]) * f;
             let y = a[1] + (b[1] - a[1]) * f;
-            if !self.point_ok(x, y) || !self.body_ok(x, y, heading) {
+            if !self.point_ok(x, y) || !self.body_ok(x, y, heading) || !self.slope_ok(x, y, heading)
+            {
                 return None;
             }
             let h = self.scene.height_at(x, y);
@@ -208,7 +231,10 @@ pub(crate) fn smooth(ctx: &RefineCtx, pts: &mut [[f64; 2]], iterations: usize) {
             ];
             let q = [p[0] + 0.5 * (m[0] - p[0]), p[1] + 0.5 * (m[1] - p[1])];
             let heading = (pts[i + 1][1] - pts[i - 1][1]).atan2(pts[i + 1][0] - pts[i - 1][0]);
-            if ctx.point_ok(q[0], q[1]) && ctx.body_ok(q[0], q[1], heading) {
+            if ctx.point_ok(q[0], q[1])
+                && ctx.body_ok(q[0], q[1], heading)
+                && ctx.slope_ok(q[0], q[1], heading)
+            {
                 pts[i] = q;
             }
         }

@@ -120,11 +120,20 @@ pub struct PlannerSettings {
     /// Height-difference cost: metres of extra cost per metre climbed or descended
     /// \[1\]. Default 0.5.
     pub height_cost: f64,
-    /// Steepest traversable slope \[rad\]; steeper edges are removed unless their
-    /// height step is at most `max_step_height`. Default 0.7 (40 degrees).
+    /// Steepest traversable slope \[rad\] (paper 4.1: "infeasible slopes"), measured
+    /// over half `slope_baseline` before and after each edge: an edge is removed where
+    /// the terrain rises or falls faster than this over either, or where the edge
+    /// itself is steeper and its height step is above `max_step_height`. Default 0.7
+    /// (40 degrees).
     pub max_slope: f64,
     /// A height step that is always traversable (stairs) \[m\]. Default 0.25.
     pub max_step_height: f64,
+    /// Length over which `max_slope` is measured, half behind and half ahead (not in
+    /// the paper) \[m\]: about a stride, so a stair's riser between its treads and
+    /// gravel's bumps average out while a hillside does not. On one grid cell every slope whose rise per cell is
+    /// under `max_step_height` would pass as a step: with 0.1 m cells a 65 degree
+    /// face did. 0 measures each edge alone (that old rule). Default 0.6.
+    pub slope_baseline: f64,
     /// Speed reduction on slopes: v_cap = v / (1 + k * tan(slope along path)) \[1\].
     /// Default 1.0.
     pub slope_speed_gain: f64,
@@ -204,6 +213,7 @@ impl Default for PlannerSettings {
             height_cost: 0.5,
             max_slope: 0.7,
             max_step_height: 0.25,
+            slope_baseline: 0.6,
             slope_speed_gain: 1.0,
             grid_stride: 1,
             alt_landmarks: 0,
@@ -273,6 +283,7 @@ impl PlannerSettings {
             }
         }
         let non_negative = [
+            ("slope_baseline", self.slope_baseline),
             ("slope_preference_c", self.slope_preference_c),
             ("crawl_relief_cost", self.crawl_relief_cost),
             ("height_cost", self.height_cost),

@@ -632,3 +632,77 @@ fn bad_host_obstacles_are_rejected_naming_the_obstacle() {
     p.set_external_obstacles(0.0, &[ok]).unwrap();
     assert_eq!(p.external_obstacles(), &[ok]);
 }
+
+/// The pyramid scene's 40 m x 30 m yard flat, but for a berm 0.6 m high across it at
+/// x = 20 with faces of `face_deg`, from y = 0 to 26: the way round is through the gap
+/// at y 26-30, 7.6 m longer than straight over.
+fn berm_scene(face_deg: f64) -> Scene {
+    let mut s = pyramid_scene(0.0);
+    let t = &mut s.terrain;
+    for j in 0..t.ny {
+        for i in 0..t.nx {
+            let [x, y] = t.position(i, j);
+            if y <= 26.0 {
+                t.heights[j * t.nx + i] =
+                    (0.6 - (x - 20.0).abs() * face_deg.to_radians().tan()).max(0.0);
+            }
+        }
+    }
+    s
+}
+
+#[test]
+fn a_face_steeper_than_max_slope_is_walked_around() {
+    // Whether the path crosses the berm (x = 20) rather than going round its end.
+    let over = |face_deg: f64, slope_baseline: f64| {
+        let p = Planner::new(
+            berm_scene(face_deg),
+            "walk from the west to the east",
+            [6.0, 15.0],
+            PlannerSettings {
+                slope_baseline,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let t = &p.route()[0];
+        let at = t
+            .points
+            .iter()
+            .min_by(|a, b| (a.x - 20.0).abs().total_cmp(&(b.x - 20.0).abs()))
+            .unwrap();
+        at.y < 25.0
+    };
+    let baseline = PlannerSettings::default().slope_baseline;
+    // A 20 degree berm is crossed ...
+    assert!(over(20.0, baseline));
+    // ... a 60 degree one (max_slope is 40) is not, though it rises 0.17 m per 0.1 m
+    // cell: each cell alone is a step under max_step_height, so judged edge by edge
+    // (slope_baseline 0) it is crossed.
+    assert!(!over(60.0, baseline));
+    assert!(over(60.0, 0.0));
+}
+
+#[test]
+fn a_step_on_a_slope_is_still_a_step() {
+    // The yard rises at 20 degrees from x = 18, with a 0.2 m step across it at x = 20
+    // (a stair on a ramp, or a ledge where terrain tiles meet): no way round.
+    let mut scene = pyramid_scene(0.0);
+    let t = &mut scene.terrain;
+    for j in 0..t.ny {
+        for i in 0..t.nx {
+            let [x, _] = t.position(i, j);
+            let step = if x >= 20.0 { 0.2 } else { 0.0 };
+            t.heights[j * t.nx + i] = (x - 18.0).max(0.0) * 20f64.to_radians().tan() + step;
+        }
+    }
+    // Over half a baseline the step and the ramp together rise 41 degrees; the step
+    // taken out, 20.
+    let p = Planner::new(
+        scene,
+        "walk from the west to the east",
+        [6.0, 15.0],
+        PlannerSettings::default(),
+    );
+    assert!(p.is_ok(), "{:?}", p.err());
+}
