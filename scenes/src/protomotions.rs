@@ -170,7 +170,7 @@ pub fn from_json_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
                     max: [half, TILE_SIZE],
                 };
                 let right = Area {
-                    min: [half + 0.05, 0.0],
+                    min: [half, 0.0],
                     max: [TILE_SIZE, TILE_SIZE],
                 };
                 tiles.push(tile(
