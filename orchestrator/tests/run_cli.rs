@@ -571,11 +571,14 @@ fn recorded_falls(out: &Path) -> usize {
         .count()
 }
 
+/// A JSON file a run recorded into `out`.
+fn recorded_json(out: &Path, file: &str) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(out.join(file)).unwrap()).unwrap()
+}
+
 /// The falls the run's summary counts (metrics.json).
 fn summary_falls(out: &Path) -> usize {
-    let m: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
-    m["agents"][0]["results"]
+    recorded_json(out, "metrics.json")["agents"][0]["results"]
         .as_array()
         .unwrap()
         .iter()
@@ -645,9 +648,7 @@ fn parameter_files_from_tune_drive_the_controller_in_both_modes() {
 
 /// The fastest planned speed in a run's `plans.json` \[m/s\].
 fn planned_top_speed(out: &Path) -> f64 {
-    let plans: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("plans.json")).unwrap()).unwrap();
-    plans["initial"][0]["route"]
+    recorded_json(out, "plans.json")["initial"][0]["route"]
         .as_array()
         .unwrap()
         .iter()
