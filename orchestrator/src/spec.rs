@@ -50,13 +50,11 @@ pub struct ParamFiles {
 /// Planner settings from a TOML file of [`PlannerSettings`] fields (the rest keep
 /// their defaults), validated; the error names the file and the field.
 pub fn load_planner_settings(path: &Path) -> Result<PlannerSettings, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("planner parameter file {}: {e}", path.display()))?;
-    let settings: PlannerSettings = toml::from_str(&text)
-        .map_err(|e| format!("planner parameter file {}: {e}", path.display()))?;
-    settings
-        .validate()
-        .map_err(|e| format!("planner parameter file {}: {e}", path.display()))?;
+    let named =
+        |e: &dyn std::fmt::Display| format!("planner parameter file {}: {e}", path.display());
+    let text = std::fs::read_to_string(path).map_err(|e| named(&e))?;
+    let settings: PlannerSettings = toml::from_str(&text).map_err(|e| named(&e))?;
+    settings.validate().map_err(|e| named(&e))?;
     Ok(settings)
 }
 
@@ -115,17 +113,14 @@ impl RunSpec {
                 first.text
             )));
         };
-        let at = |n: &str| {
+        let region = |n: &str| {
             scene
                 .landmark(n)
-                .map(|l| l.region.center())
+                .map(|l| &l.region)
                 .ok_or_else(|| RunError::Setup(format!("no landmark `{n}`")))
         };
-        let source = scene
-            .landmark(name)
-            .ok_or_else(|| RunError::Setup(format!("no landmark `{name}`")))?;
-        let [x, y] = start_spot(scene, &source.region);
-        let [tx, ty] = at(&first.target)?;
+        let [x, y] = start_spot(scene, region(name)?);
+        let [tx, ty] = region(&first.target)?.center();
         let r = splitmix(&mut (self.seed ^ splitmix(&mut (k as u64))));
         let unit = (r >> 11) as f64 / (1u64 << 53) as f64;
         let yaw = (ty - y).atan2(tx - x) + (2.0 * unit - 1.0) * SEED_YAW_JITTER;
