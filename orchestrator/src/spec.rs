@@ -47,6 +47,55 @@ pub struct ParamFiles {
     pub planner: Option<PathBuf>,
 }
 
+/// Controller parameters already read (a sweep reads its files once, then runs every
+/// job from them); `None` keeps the built-in parameters.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ControllerParams {
+    /// Biped gait parameters.
+    pub gait: Option<GaitParams>,
+    /// Crawl parameters.
+    pub crawl: Option<CrawlParams>,
+}
+
+impl ControllerParams {
+    /// Read the files of `files` (its `planner` is not the controller's); an error
+    /// names the file.
+    pub fn load(files: &ParamFiles) -> Result<Self, String> {
+        fn named<T, E: std::fmt::Display>(
+            what: &str,
+            path: &Path,
+            r: Result<T, E>,
+        ) -> Result<T, String> {
+            r.map_err(|e| {
+                let (e, p) = (e.to_string(), path.display().to_string());
+                // Parse errors already start with the path.
+                if e.contains(&p) {
+                    format!("{what} parameter file {e}")
+                } else {
+                    format!("{what} parameter file {p}: {e}")
+                }
+            })
+        }
+        Ok(Self {
+            gait: files
+                .gait
+                .as_deref()
+                .map(|p| named("gait", p, GaitParams::load(p)))
+                .transpose()?,
+            crawl: files
+                .crawl
+                .as_deref()
+                .map(|p| named("crawl", p, CrawlParams::load(p)))
+                .transpose()?,
+        })
+    }
+
+    /// Whether both are the built-in parameters.
+    pub fn is_built_in(&self) -> bool {
+        self.gait.is_none() && self.crawl.is_none()
+    }
+}
+
 /// Planner settings from a TOML file of [`PlannerSettings`] fields (the rest keep
 /// their defaults), validated; the error names the file and the field.
 pub fn load_planner_settings(path: &Path) -> Result<PlannerSettings, String> {
@@ -82,6 +131,25 @@ fn start_spot(scene: &Scene, region: &Region) -> [f64; 2] {
         })
         .find(|p| region.contains(p[0], p[1]) && stands_clear(scene, p[0], p[1]))
         .unwrap_or(c)
+}
+
+/// Agent `k`'s model-based controller with `params` (built-in where `None`).
+pub fn controller_with(
+    scene: &Scene,
+    k: usize,
+    params: ControllerParams,
+) -> Result<ControllerComponent, RunError> {
+    let policy = ModelBasedController::with_all_params(
+        params.gait.unwrap_or_default(),
+        params.crawl.unwrap_or_default(),
+        ControllerSettings::default(),
+    )
+    .map_err(setup)?;
+    Ok(ControllerComponent::with_policy(
+        k as u32,
+        scene.clone(),
+        Box::new(policy),
+    ))
 }
 
 fn setup(e: impl std::fmt::Display) -> RunError {
@@ -141,22 +209,8 @@ impl RunSpec {
 
     /// Agent `k`'s controller: the model-based policy with the spec's parameter files.
     pub fn controller(&self, scene: &Scene, k: usize) -> Result<ControllerComponent, RunError> {
-        let gait = match &self.params.gait {
-            Some(p) => GaitParams::load(p).map_err(setup)?,
-            None => GaitParams::default(),
-        };
-        let crawl = match &self.params.crawl {
-            Some(p) => CrawlParams::load(p).map_err(setup)?,
-            None => CrawlParams::default(),
-        };
-        let policy =
-            ModelBasedController::with_all_params(gait, crawl, ControllerSettings::default())
-                .map_err(setup)?;
-        Ok(ControllerComponent::with_policy(
-            k as u32,
-            scene.clone(),
-            Box::new(policy),
-        ))
+        let params = ControllerParams::load(&self.params).map_err(setup)?;
+        controller_with(scene, k, params)
     }
 
     /// The physics world with every agent at its start.

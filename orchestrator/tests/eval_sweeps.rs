@@ -12,7 +12,8 @@ use plamo::eval::dynamic::Dynamic;
 use plamo::eval::pyramid::Pyramid;
 use plamo::eval::random::RandomScenes;
 use plamo::eval::slalom::{QpConfig, Slalom};
-use plamo::eval::{self, Experiment, RunOptions, Shard, Table};
+use plamo::eval::{self, ControllerParams, Experiment, RunOptions, Shard, Table};
+use plamo_controller::{CrawlParams, GaitParams};
 use plamo_physics::BackendKind;
 
 fn tmp(name: &str) -> support::OutDir {
@@ -28,6 +29,7 @@ fn opts(out: &Path, threads: usize, shard: Shard) -> RunOptions {
         max_seconds: Some(1.0),
         quiet: true,
         planner: None,
+        controller: Default::default(),
     }
 }
 
@@ -198,10 +200,42 @@ fn bad_arguments_are_refused_by_name() {
         "/tmp/plamo-eval-x",
     ]);
     assert!(!ok && err.contains("--max-seconds"), "{err}");
+    // Controller parameter files: a value out of range, a gait file given as crawl.
+    let dir = tmp("bad-params");
+    std::fs::create_dir_all(&dir).unwrap();
+    let fast = dir.join("fast-crawl.toml");
+    std::fs::write(
+        &fast,
+        plamo_controller::DEFAULT_CRAWL_PARAMS
+            .lines()
+            .map(|l| {
+                if l.starts_with("max_speed") {
+                    "max_speed = 99.0"
+                } else {
+                    l
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n"),
+    )
+    .unwrap();
+    let gait = dir.join("gait.toml");
+    std::fs::write(&gait, plamo_controller::DEFAULT_GAIT_PARAMS).unwrap();
+    for (flag, file, needle) in [
+        ("--crawl-params", &fast, "max_speed"),
+        ("--crawl-params", &gait, "unknown field"),
+    ] {
+        let (ok, err) = plamo(&["eval", "random", flag, file.to_str().unwrap()]);
+        assert!(!ok, "{flag} {} succeeded", file.display());
+        for n in [needle, "crawl parameter file", file.to_str().unwrap()] {
+            assert!(err.contains(n), "`{n}` not in {err}");
+        }
+    }
 }
 
 /// random.md's replay command, run as written, retraces the eval's tour bit for bit,
-/// with the built-in planner settings and with a `--planner-params` file.
+/// with the built-in parameters, with a `--planner-params` file and with
+/// `--gait-params` and `--crawl-params` files.
 #[test]
 fn a_random_tour_replays_with_plamo_run() {
     // Twice the paper's a_max: the plan speeds up faster from the first step.
@@ -209,12 +243,25 @@ fn a_random_tour_replays_with_plamo_run() {
         a_max: 1.0,
         ..Default::default()
     };
+    // A slower crawl, and the built-in biped written out as a file.
+    let slow_crawl = ControllerParams {
+        gait: Some(GaitParams::default()),
+        crawl: Some(CrawlParams {
+            max_speed: 0.4,
+            ..Default::default()
+        }),
+    };
     let mut digests = Vec::new();
-    for (name, planner) in [("replay", None), ("replay-brisk", Some(brisk))] {
+    for (name, planner, controller) in [
+        ("replay", None, ControllerParams::default()),
+        ("replay-brisk", Some(brisk), ControllerParams::default()),
+        ("replay-slow-crawl", None, slow_crawl),
+    ] {
         let out = tmp(name);
         // Past the get-down that starts this crawl tour, where the plans differ.
         let o = RunOptions {
             planner,
+            controller,
             max_seconds: Some(4.0),
             ..opts(&out, 1, Shard::ALL)
         };
@@ -230,11 +277,13 @@ fn a_random_tour_replays_with_plamo_run() {
             .lines()
             .find(|l| l.starts_with("plamo run --scene random-11 "))
             .unwrap_or_else(|| panic!("no replay command in\n{md}"));
-        assert_eq!(
-            line.contains("--planner-params"),
-            o.planner.is_some(),
-            "{line}"
-        );
+        for (flag, given) in [
+            ("--planner-params", o.planner.is_some()),
+            ("--gait-params", o.controller.gait.is_some()),
+            ("--crawl-params", o.controller.crawl.is_some()),
+        ] {
+            assert_eq!(line.contains(flag), given, "{flag}: {line}");
+        }
         let dir = tmp(&format!("{name}-run"));
         let cmd = format!(
             "{} --quiet --out {}",
@@ -254,4 +303,5 @@ fn a_random_tour_replays_with_plamo_run() {
         digests.push(digest);
     }
     assert_ne!(digests[0], digests[1], "the planner file changed nothing");
+    assert_ne!(digests[0], digests[2], "the crawl file changed nothing");
 }

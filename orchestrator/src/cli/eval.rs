@@ -72,6 +72,13 @@ pub struct SweepArgs {
     /// its own swept fields on top of it.
     #[arg(long)]
     planner_params: Option<PathBuf>,
+    /// Biped gait parameter file, e.g. from `plamo tune` (default: the built-in one).
+    #[arg(long)]
+    gait_params: Option<PathBuf>,
+    /// Crawl parameter file, e.g. from `plamo tune --form crawl` (default: the
+    /// built-in one).
+    #[arg(long)]
+    crawl_params: Option<PathBuf>,
 }
 
 impl SweepArgs {
@@ -82,6 +89,12 @@ impl SweepArgs {
             .map(plamo::spec::load_planner_settings)
             .transpose()
             .map_err(anyhow::Error::msg)?;
+        let controller = plamo::spec::ControllerParams::load(&plamo::spec::ParamFiles {
+            gait: self.gait_params.clone(),
+            crawl: self.crawl_params.clone(),
+            planner: None,
+        })
+        .map_err(anyhow::Error::msg)?;
         Ok(RunOptions {
             physics: self.physics,
             out: self
@@ -93,6 +106,7 @@ impl SweepArgs {
             max_seconds: self.max_seconds,
             quiet: self.quiet,
             planner,
+            controller,
         })
     }
 }

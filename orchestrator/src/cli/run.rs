@@ -67,10 +67,16 @@ impl SpecArgs {
                 "{m} --instructions for {n} agents: give one for all or one per agent"
             ),
         };
-        // A bad planner file fails here, before any component process starts.
+        // A bad parameter file fails here, before any component process starts.
         if let Some(f) = &self.planner_params {
             plamo::spec::load_planner_settings(f).map_err(anyhow::Error::msg)?;
         }
+        plamo::spec::ControllerParams::load(&ParamFiles {
+            gait: self.gait_params.clone(),
+            crawl: self.crawl_params.clone(),
+            planner: None,
+        })
+        .map_err(anyhow::Error::msg)?;
         Ok(RunSpec {
             scene: self.scene.clone(),
             instructions,

@@ -108,6 +108,7 @@ pub fn scene(seed: u64) -> anyhow::Result<Scene> {
         seed,
         // The scene is the seed's alone: timed against the default plan.
         planner: settings(PlannerSettings::default(), true),
+        controller: Default::default(),
         max_seconds: None,
     };
     let (_, planner) = plan(&spec).map_err(anyhow::Error::msg)?;
@@ -209,6 +210,7 @@ impl Experiment for Dynamic {
             backend: opts.physics,
             seed,
             planner: settings(opts.planner(), replan),
+            controller: opts.controller,
             max_seconds: opts.max_seconds,
         };
         // Planner only: would the start plan meet an obstacle anywhere along it?

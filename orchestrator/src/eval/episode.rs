@@ -16,7 +16,7 @@ use plamo_scenes::{ObstacleShape, Scene};
 
 use super::ground::{GroundKind, ground_kind};
 use crate::lockstep::{InProcess, Links, Lockstep, RunError, StepStatus};
-use crate::spec::RunSpec;
+use crate::spec::{ControllerParams, RunSpec, controller_with};
 
 /// Radius around a body's origin taken as its surface when checking contact with
 /// moving obstacles \[m\] (the humanoid's limb capsules are
@@ -44,6 +44,8 @@ pub struct EpisodeSpec<'a> {
     pub seed: u64,
     /// Planner parameters.
     pub planner: PlannerSettings,
+    /// Controller parameters.
+    pub controller: ControllerParams,
     /// Simulated-time limit \[s\]; `None`: [`TIME_LIMIT_FACTOR`] x planned time +
     /// [`TIME_LIMIT_EXTRA`].
     pub max_seconds: Option<f64>,
@@ -265,7 +267,7 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
         ))],
         controllers: vec![Box::new(InProcess::new(
             "controller-0",
-            run.controller(scene, 0)?,
+            controller_with(scene, 0, spec.controller)?,
         ))],
     };
     let mut ls = Lockstep::start(
@@ -361,6 +363,7 @@ mod tests {
             backend: BackendKind::Rapier,
             seed: 0,
             planner: PlannerSettings::default(),
+            controller: Default::default(),
             // Long enough for the run to go over the flight and back onto it: 8 s
             // stopped falling there once rapier took 4 solver iterations.
             max_seconds: Some(16.0),

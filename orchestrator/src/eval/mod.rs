@@ -21,11 +21,13 @@ pub mod table;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
+use plamo_controller::{CrawlParams, GaitParams};
 use plamo_physics::BackendKind;
 use plamo_planner::PlannerSettings;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+pub use crate::spec::ControllerParams;
 pub use table::Table;
 
 use crate::progress::Progress;
@@ -88,6 +90,8 @@ pub struct RunOptions {
     /// Planner settings every run starts from (each experiment sets its swept fields
     /// on top); `None`: the defaults.
     pub planner: Option<PlannerSettings>,
+    /// Controller parameters of every run (`--gait-params`, `--crawl-params`).
+    pub controller: ControllerParams,
 }
 
 impl RunOptions {
@@ -100,6 +104,11 @@ impl RunOptions {
 /// The planner settings of a sweep run with `--planner-params`, written next to
 /// `eval.json` (every field, defaults included).
 pub const PLANNER_FILE: &str = "planner.toml";
+/// The gait parameters of a sweep run with `--gait-params`, written next to `eval.json`.
+pub const GAIT_FILE: &str = "gait.toml";
+/// The crawl parameters of a sweep run with `--crawl-params`, written next to
+/// `eval.json`.
+pub const CRAWL_FILE: &str = "crawl.toml";
 
 /// What every output folder says about the sweep that wrote it (`eval.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -120,12 +129,41 @@ pub struct Meta {
     /// Planner settings from `--planner-params`, when given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub planner: Option<PlannerSettings>,
+    /// Gait parameters from `--gait-params`, when given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gait: Option<GaitParams>,
+    /// Crawl parameters from `--crawl-params`, when given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crawl: Option<CrawlParams>,
 }
 
 impl Meta {
     /// The planner settings every run of the sweep started from.
     pub fn planner(&self) -> PlannerSettings {
         self.planner.clone().unwrap_or_default()
+    }
+
+    /// The controller parameters every run of the sweep used.
+    pub fn controller(&self) -> ControllerParams {
+        ControllerParams {
+            gait: self.gait,
+            crawl: self.crawl,
+        }
+    }
+
+    /// The parameter files this sweep wrote next to `eval.json`, as command-line
+    /// flags, each path `dir` joined with the file's name (`dir` empty: the bare
+    /// names, for a command run in the folder).
+    pub fn param_flags(&self, dir: &Path) -> String {
+        [
+            ("--planner-params", PLANNER_FILE, self.planner.is_some()),
+            ("--gait-params", GAIT_FILE, self.gait.is_some()),
+            ("--crawl-params", CRAWL_FILE, self.crawl.is_some()),
+        ]
+        .into_iter()
+        .filter(|f| f.2)
+        .map(|(flag, file, _)| format!(" {flag} {}", dir.join(file).display()))
+        .collect()
     }
 }
 
@@ -209,6 +247,8 @@ pub fn run<E: Experiment>(e: &E, opts: &RunOptions) -> anyhow::Result<String> {
         shard: (opts.shard != Shard::ALL).then_some(opts.shard),
         params: e.params(),
         planner: opts.planner.clone(),
+        gait: opts.controller.gait,
+        crawl: opts.controller.crawl,
     };
     write_folder(e, &meta, table, &opts.out)
 }
@@ -225,9 +265,15 @@ fn write_folder<E: Experiment>(
         out.join("eval.json"),
         serde_json::to_string_pretty(meta)? + "\n",
     )?;
-    // The summaries' commands pass this file, so they rerun the sweep as it was.
+    // The summaries' commands pass these files, so they rerun the sweep as it was.
     if let Some(p) = &meta.planner {
         std::fs::write(out.join(PLANNER_FILE), toml::to_string(p)?)?;
+    }
+    if let Some(p) = &meta.gait {
+        std::fs::write(out.join(GAIT_FILE), toml::to_string(p)?)?;
+    }
+    if let Some(p) = &meta.crawl {
+        std::fs::write(out.join(CRAWL_FILE), toml::to_string(p)?)?;
     }
     // The summary reads the rows back from their text, so a merged sweep (which only
     // has the text) summarizes exactly the same numbers.
@@ -399,14 +445,11 @@ pub fn command_line(meta: &Meta, args: &str) -> String {
     let cap = meta
         .max_seconds
         .map_or(String::new(), |m| format!(" --max-seconds {m}"));
-    let planner = if meta.planner.is_some() {
-        format!(" --planner-params {PLANNER_FILE}")
-    } else {
-        String::new()
-    };
     format!(
-        "plamo eval {} --physics {}{args}{cap}{planner}",
-        meta.experiment, meta.physics
+        "plamo eval {} --physics {}{args}{cap}{}",
+        meta.experiment,
+        meta.physics,
+        meta.param_flags(Path::new(""))
     )
 }
 

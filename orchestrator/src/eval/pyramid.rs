@@ -111,6 +111,7 @@ impl Experiment for Pyramid {
             backend: opts.physics,
             seed,
             planner: Self::settings(opts.planner(), c),
+            controller: opts.controller,
             max_seconds: opts.max_seconds,
         };
         let top = plan(&spec).map_or(f64::NAN, |(_, p)| {
@@ -247,6 +248,7 @@ impl Experiment for Pyramid {
                 backend: plamo_physics::BackendKind::Rapier,
                 seed: self.seed,
                 planner: Self::settings(meta.planner(), c),
+                controller: meta.controller(),
                 max_seconds: None,
             };
             if let Ok((_, p)) = plan(&spec) {

@@ -19,7 +19,7 @@ use super::episode::{EpisodeSpec, TIME_LIMIT_EXTRA, TIME_LIMIT_FACTOR, run_episo
 use super::ground::GroundKind;
 use super::plot::{Bar, bars};
 use super::table::field;
-use super::{Experiment, Meta, PLANNER_FILE, RunOptions, Table, command_line, mean, wilson};
+use super::{Experiment, Meta, RunOptions, Table, command_line, mean, wilson};
 use crate::seeds::splitmix;
 
 /// The four locomotion forms, as instruction verbs.
@@ -100,11 +100,7 @@ fn replay_note(runs: &Table, meta: &Meta, out: &Path) -> anyhow::Result<String> 
         Some(m) => m,
         None => TIME_LIMIT_FACTOR * runs.f64(r, "planned_time")? + TIME_LIMIT_EXTRA,
     };
-    let planner = if meta.planner.is_some() {
-        format!(" --planner-params {}", out.join(PLANNER_FILE).display())
-    } else {
-        String::new()
-    };
+    let params = meta.param_flags(out);
     Ok(format!(
         "\n\nEvery tour replays exactly, with its trajectory, plots and replay files, as \
          `plamo run --scene random-<scene_seed> --instructions \"<instructions>\" --physics \
@@ -112,7 +108,7 @@ fn replay_note(runs: &Table, meta: &Meta, out: &Path) -> anyhow::Result<String> 
          digest is runs.csv's `digest`), where the time limit is {TIME_LIMIT_FACTOR} x the planned time + {TIME_LIMIT_EXTRA} s unless \
          `--max-seconds` was given. The first tour that failed ({cause}):\n\n\
          ```\nplamo run --scene random-{seed} --instructions \"{text}\" --physics {physics} \
-         --seed {seed} --max-seconds {limit}{planner} --out random-{seed}\n```\n",
+         --seed {seed} --max-seconds {limit}{params} --out random-{seed}\n```\n",
         physics = meta.physics,
         cause = runs.str(r, "cause")?,
         text = runs.str(r, "instructions")?,
@@ -233,6 +229,7 @@ impl Experiment for RandomScenes {
             backend: opts.physics,
             seed: scene_seed,
             planner: opts.planner(),
+            controller: opts.controller,
             max_seconds: opts.max_seconds,
         })?;
         let finished = ep.reached == ep.instructions;

@@ -233,6 +233,7 @@ impl Slalom {
                 backend: plamo_physics::BackendKind::Rapier,
                 seed: self.seed,
                 planner: q.settings(meta.planner()),
+                controller: meta.controller(),
                 max_seconds: None,
             };
             if let Ok((_, p)) = plan(&spec) {
@@ -341,6 +342,7 @@ impl Experiment for Slalom {
             backend: opts.physics,
             seed,
             planner: point.settings(opts.planner()),
+            controller: opts.controller,
             max_seconds: opts.max_seconds,
         })?;
         let (kind, v, a_lat, a_max) = match point {
