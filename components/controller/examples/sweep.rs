@@ -3,7 +3,7 @@
 //! `plamo eval locomotion`'s terrain strips.
 //!
 //! `cargo run --release -p plamo-controller --features mujoco --example sweep --
-//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc] [flat|slope|rough|stairs|stairs-at-DEG|SCENE.toml]`
+//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc|turn] [flat|slope|rough|stairs|stairs-at-DEG|SCENE.toml]`
 //!
 //! On a strip the runs start where `plamo eval locomotion` starts them (0.37 m apart
 //! along the strip, 0.1 m apart sideways) and stop before its 30 m end.
@@ -14,6 +14,12 @@
 //! Walk 0.8 / 1.2 m/s, 16 runs, at HEAD 29965cf: falls per run 1.06 / 1.19 at 90,
 //! 0.0 / 0.69 at 45, 0.12 / 1.0 at 60, against 0.06 / 0.31 on the square stairs strip.
 //!
+//! `turn`: 3 m along +X, then off at 120-180 degrees (left and right by turns), the path
+//! slowing to 0.6 x the speed at the corner (`PLAMO_TURN_CORNER` sets the fraction), on
+//! flat ground: a landmark of the random tours, where most legs turn back. Crouch-walk
+//! 1 m/s, 48 runs of 10 s with the corner at full speed, gait of 28bee9f: 0.19 falls
+//! per run (walk 1-1.5 m/s: 0).
+//!
 //! `PLAMO_TRACE=R` traces run R of the first engine and speed instead: the body's
 //! state every 1/15 s over the 1.5 s before each fall (what the body did in the fall;
 //! `PLAMO_TRACE_ALL=1`: all along).
@@ -22,7 +28,7 @@ use std::error::Error;
 use plamo_controller::{
     Action, ArcPath, ControllerSettings, GaitParams, HeadPath, MetricsSummary,
     ModelBasedController, Observation, Policy, RUN_STAGGER, RampedPath, START_ACCEL, STRIP_LENGTH,
-    StraightPath, control_step, flat_scene, run_path, staggered_start, terrain_scene,
+    StraightPath, TurnPath, control_step, flat_scene, run_path, staggered_start, terrain_scene,
 };
 use plamo_physics::{BackendKind, FEET, HumanoidPose, PhysicsSettings, create_backend};
 use plamo_scenes::Scene;
@@ -42,12 +48,28 @@ fn main() -> Result<(), Box<dyn Error>> {
     let head: f64 = arg(2, "1.47").parse()?;
     let duration: f64 = arg(3, "10").parse()?;
     let runs: usize = arg(4, "4").parse()?;
-    let arc = match arg(5, "straight").as_str() {
-        "straight" => false,
-        "arc" => true,
-        other => return Err(format!("path `{other}`: expected straight or arc").into()),
+    let kind = arg(5, "straight");
+    if !["straight", "arc", "turn"].contains(&kind.as_str()) {
+        return Err(format!("path `{kind}`: expected straight, arc or turn").into());
+    }
+    let arc = kind == "arc";
+    // `turn`: 3 m, then off at 120-180 degrees, left and right by turns, slowing to 0.6
+    // x the speed at the corner (the random tours' landmarks, where most legs turn back
+    // and the new leg starts at about the speed the body arrives with).
+    let turn = kind == "turn";
+    // PLAMO_TURN_CORNER=F: the corner speed as a fraction of the speed (default 0.6).
+    let corner: f64 = match std::env::var("PLAMO_TURN_CORNER") {
+        Ok(f) => f
+            .parse()
+            .ok()
+            .filter(|c| (0.0..=1.0).contains(c))
+            .ok_or_else(|| format!("PLAMO_TURN_CORNER `{f}`: expected a fraction in 0..=1"))?,
+        Err(_) => 0.6,
     };
     let terrain = arg(6, "flat");
+    if turn && terrain != "flat" {
+        return Err(format!("path `turn` runs on flat ground, not `{terrain}`").into());
+    }
     // The strip (and where runs start on it) is eval locomotion's; checked once here.
     // A scene file (`.toml`) or one of the stairs strips crossed at an angle stands in
     // for a strip: the same 30 m path from (5, 3).
@@ -83,7 +105,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     // a fall).
     let ground = |length: f64| {
         let mut scene = flat_scene(length + 10.0);
-        if arc {
+        if arc || turn {
             scene.terrain = plamo_scenes::HeightGrid::flat([-15.0, -15.0], [30.0, 30.0], 0.1, 0.0);
         }
         scene
@@ -92,7 +114,22 @@ fn main() -> Result<(), Box<dyn Error>> {
     // and Table 2's paths.
     let make_path = |r: usize, speed: f64| -> Box<dyn HeadPath> {
         let start = staggered_start(strip_start, r);
-        if arc {
+        if turn {
+            // Starts 0.05 m apart near the middle of the 30 m square (a strip's stagger
+            // would walk 48 runs off it).
+            let start = [-4.0 + 0.05 * (r % 10) as f64, 0.05 * (r / 10) as f64];
+            let deg = 120.0 + 15.0 * (r / 2 % 5) as f64;
+            let sign = if r.is_multiple_of(2) { 1.0 } else { -1.0 };
+            Box::new(TurnPath {
+                start,
+                speed,
+                corner_speed: corner * speed,
+                head_height: head,
+                first: 3.0,
+                turn: sign * deg.to_radians(),
+                accel: START_ACCEL,
+            })
+        } else if arc {
             Box::new(ArcPath {
                 start,
                 speed,

@@ -135,6 +135,94 @@ impl HeadPath for RampedPath {
     }
 }
 
+/// A path that turns at a corner: along +X for `first` metres (from rest at `accel` up
+/// to `speed`, braking at `accel` to `corner_speed` at the corner), then off at `turn`
+/// \[rad\] (positive left), from `corner_speed` up to `speed` again. In the random
+/// tours every landmark is such a corner and most legs turn back (2-3 rad); the
+/// planner starts the new leg at about the speed the body arrives with (0.6-0.9 m/s
+/// in the tours' crouch-walk legs), so the body has to reverse while the plan already
+/// leads off sideways or behind it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TurnPath {
+    /// Start of the head path (x, y) \[m\].
+    pub start: [f64; 2],
+    /// Speed between the ramps \[m/s\], > 0.
+    pub speed: f64,
+    /// Speed at the corner \[m/s\], in \[0, `speed`\].
+    pub corner_speed: f64,
+    /// Head height above the terrain \[m\].
+    pub head_height: f64,
+    /// Length of the first leg \[m\], at least `speed^2 / accel`.
+    pub first: f64,
+    /// Turn at the corner, positive to the left \[rad\].
+    pub turn: f64,
+    /// Acceleration and braking \[m/s^2\], > 0.
+    pub accel: f64,
+}
+
+impl TurnPath {
+    /// Time and distance it takes to go from `v0` to `v1` at `accel`.
+    fn ramp(&self, v0: f64, v1: f64) -> (f64, f64) {
+        let t = (v1 - v0).abs() / self.accel;
+        (t, 0.5 * (v0 + v1) * t)
+    }
+
+    /// Position (x, y), speed and direction of travel \[rad\] at time `t`.
+    fn pose(&self, t: f64) -> ([f64; 2], f64, f64) {
+        let (v, a, vc) = (self.speed, self.accel, self.corner_speed);
+        let t = t.max(0.0);
+        let (t_up, d_up) = self.ramp(0.0, v);
+        let (t_down, d_down) = self.ramp(vc, v);
+        let t_cruise = (self.first - d_up - d_down).max(0.0) / v;
+        let t1 = t_up + t_cruise + t_down;
+        if t < t1 {
+            let (s, vel) = if t < t_up {
+                (0.5 * a * t * t, a * t)
+            } else if t < t_up + t_cruise {
+                (d_up + v * (t - t_up), v)
+            } else {
+                let r = t1 - t;
+                (self.first - vc * r - 0.5 * a * r * r, vc + a * r)
+            };
+            return ([self.start[0] + s, self.start[1]], vel, 0.0);
+        }
+        let tau = t - t1;
+        let (s, vel) = if tau < t_down {
+            (vc * tau + 0.5 * a * tau * tau, vc + a * tau)
+        } else {
+            (d_down + v * (tau - t_down), v)
+        };
+        let (sin, cos) = self.turn.sin_cos();
+        (
+            [
+                self.start[0] + self.first + s * cos,
+                self.start[1] + s * sin,
+            ],
+            vel,
+            self.turn,
+        )
+    }
+}
+
+impl HeadPath for TurnPath {
+    fn point(&self, scene: &Scene, t: f64) -> Waypoint {
+        let ([x, y], v, _) = self.pose(t);
+        Waypoint {
+            x,
+            y,
+            z: scene.height_at(x, y) + self.head_height,
+            v,
+        }
+    }
+    fn direction(&self, t: f64) -> [f64; 2] {
+        let (_, _, h) = self.pose(t);
+        [h.cos(), h.sin()]
+    }
+    fn head_height(&self) -> f64 {
+        self.head_height
+    }
+}
+
 /// A head path the rollout follows: the plan's point at time `t` and the path's
 /// direction there.
 pub trait HeadPath {
@@ -395,5 +483,37 @@ mod tests {
         assert!((late.x - (line.at(&scene, 10.0).x - 4.0)).abs() < 1e-9);
         assert_eq!(late.v, 4.0);
         assert_eq!(late.z, 1.47);
+    }
+
+    #[test]
+    fn turn_path_slows_into_its_corner_and_leaves_at_the_turn() {
+        let scene = flat_scene(100.0);
+        let p = TurnPath {
+            start: [0.0, 0.0],
+            speed: 1.0,
+            corner_speed: 0.5,
+            head_height: 0.8,
+            first: 3.0,
+            turn: 3.0,
+            accel: 2.0,
+        };
+        // Up in 0.5 s (0.25 m), down to 0.5 m/s in 0.25 s (0.1875 m): at the corner
+        // after 0.5 + 2.5625 + 0.25 s.
+        let t1 = 0.5 + (3.0 - 0.25 - 0.1875) + 0.25;
+        let (a, b) = (p.point(&scene, t1 - 1e-9), p.point(&scene, t1 + 1e-9));
+        assert!(
+            (a.x - 3.0).abs() < 1e-6 && (b.x - 3.0).abs() < 1e-6,
+            "{a:?} {b:?}"
+        );
+        assert!((a.v - 0.5).abs() < 1e-6 && (b.v - 0.5).abs() < 1e-6);
+        assert_eq!(p.direction(t1 - 0.1), [1.0, 0.0]);
+        let d = p.direction(t1 + 0.1);
+        assert!((d[0] - 3f64.cos()).abs() < 1e-12 && (d[1] - 3f64.sin()).abs() < 1e-12);
+        // Back at full speed along the new leg.
+        let late = p.point(&scene, t1 + 2.0);
+        assert_eq!(late.v, 1.0);
+        let run = 0.1875 + 1.75;
+        assert!((late.x - (3.0 + run * 3f64.cos())).abs() < 1e-9);
+        assert!((late.y - run * 3f64.sin()).abs() < 1e-9);
     }
 }
