@@ -149,6 +149,44 @@ pub(crate) fn crawl_body_clear(
     })
 }
 
+/// Clear `free` (a grid of `dims` cells `res` apart over `t`'s origin) within
+/// `cliff_clearance` of every cliff of `t`: the midpoint of two neighbouring terrain
+/// samples whose heights differ by more than `max_step_height`.
+fn keep_off_cliffs(
+    t: &plamo_scenes::HeightGrid,
+    s: &PlannerSettings,
+    free: &mut [bool],
+    [nx, ny]: [usize; 2],
+    res: f64,
+) {
+    let r = s.cliff_clearance;
+    let reach = (r / res).ceil() as isize;
+    let h = |i: usize, j: usize| t.heights[j * t.nx + i];
+    for j in 0..t.ny {
+        for i in 0..t.nx {
+            for (di, dj) in [(1, 0), (0, 1)] {
+                let (i2, j2) = (i + di, j + dj);
+                if i2 >= t.nx || j2 >= t.ny || (h(i2, j2) - h(i, j)).abs() <= s.max_step_height {
+                    continue;
+                }
+                let mx = t.origin[0] + (i as f64 + 0.5 * di as f64) * t.resolution;
+                let my = t.origin[1] + (j as f64 + 0.5 * dj as f64) * t.resolution;
+                let ci = ((mx - t.origin[0]) / res).round() as isize;
+                let cj = ((my - t.origin[1]) / res).round() as isize;
+                for gj in (cj - reach).max(0)..=(cj + reach).min(ny as isize - 1) {
+                    for gi in (ci - reach).max(0)..=(ci + reach).min(nx as isize - 1) {
+                        let x = t.origin[0] + gi as f64 * res;
+                        let y = t.origin[1] + gj as f64 * res;
+                        if (x - mx).hypot(y - my) < r {
+                            free[gj as usize * nx + gi as usize] = false;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 impl PlanGrid {
     /// Build the grid for a scene.
     pub fn build(scene: &Scene, s: &PlannerSettings) -> Self {
@@ -187,6 +225,9 @@ impl PlanGrid {
                     }
                 }
             }
+        }
+        if s.cliff_clearance > 0.0 {
+            keep_off_cliffs(t, s, &mut free, [nx, ny], res);
         }
         let mut headroom = vec![f32::INFINITY; n];
         for top in &scene.tops {

@@ -706,3 +706,42 @@ fn a_step_on_a_slope_is_still_a_step() {
     );
     assert!(p.is_ok(), "{:?}", p.err());
 }
+
+#[test]
+fn a_path_keeps_off_a_cliff_as_off_a_wall() {
+    // North of y = 15.25 the yard is a plateau 0.4 m up (above max_step_height, so no
+    // edge climbs it); the straight way from west to east runs 0.25 m from its foot.
+    let mut scene = pyramid_scene(0.0);
+    let t = &mut scene.terrain;
+    for j in 0..t.ny {
+        for i in 0..t.nx {
+            let [_, y] = t.position(i, j);
+            t.heights[j * t.nx + i] = if y > 15.25 { 0.4 } else { 0.0 };
+        }
+    }
+    let closest = |cliff_clearance: f64| {
+        let p = Planner::new(
+            scene.clone(),
+            "walk from the west to the east",
+            [6.0, 15.0],
+            PlannerSettings {
+                cliff_clearance,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        p.route()[0]
+            .points
+            .iter()
+            .filter(|q| (8.0..32.0).contains(&q.x))
+            .map(|q| (15.25 - q.y).abs())
+            .fold(f64::INFINITY, f64::min)
+    };
+    let clear = PlannerSettings::default().cliff_clearance;
+    assert!(clear >= 0.3);
+    // Clearance holds to within half a cell diagonal, as for walls.
+    let d = closest(clear);
+    assert!(d >= clear - 0.08, "{d} m from the cliff");
+    let d = closest(0.0);
+    assert!(d < 0.26, "without the clearance: {d} m from the cliff");
+}
