@@ -21,12 +21,15 @@
 //!   than desired (`place_gain`), and the sweep slows while the body pitches onto its
 //!   head (`dive_slowdown`).
 //! - Terrain: each contact's height comes from the local height map; the desired
-//!   pelvis height follows the mean ground under the contacts.
+//!   pelvis height follows the mean ground under the contacts; where the map is
+//!   stepped or bumpy (stairs, gravel: `rough_step`) the top speed falls to
+//!   `rough_speed`.
 //! - Getting down and up are joint-space blends over a fixed time from the joint
 //!   angles at the switch to the crawl's (or standing) pose, with the residual
 //!   wrench holding height rate and attitude.
 //! - A bounded residual root wrench (capped by [`ControllerSettings`]) helps with
-//!   speed, height and attitude; it is reported like the biped's.
+//!   speed, height and attitude, its torque budget to roll first (`roll_first`); it
+//!   is reported like the biped's.
 
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
@@ -188,6 +191,35 @@ pub struct CrawlParams {
     /// (above `stand_above`: never; then only `stand_above` stands it up).
     #[serde(default = "never")]
     pub crouch_stand_above: f64,
+    /// Height map roughness (largest distance of a sample from the map's best-fit
+    /// plane) where the crawl starts to treat the ground as stepped \[m\]: stairs and
+    /// gravel, not slopes; at twice this it is fully rough (see `rough_speed`; 4:
+    /// never).
+    #[serde(default = "never")]
+    pub rough_step: f64,
+    /// Highest crawl speed on fully rough ground \[m/s\] (not above `max_speed`).
+    #[serde(default = "fast")]
+    pub rough_speed: f64,
+    /// Time constant of the low-pass on the roughness share \[s\]: the speed drops
+    /// smoothly, not with every sample the map gains.
+    #[serde(default = "rough_filter")]
+    pub rough_filter: f64,
+    /// Roll first in the residual torque's budget: pitch and yaw share
+    /// what the roll torque leaves of `residual_torque_cap`. On stairs the yaw wags and
+    /// the pitch errs, and with one norm cap for all three the roll torque was starved
+    /// while the body rolled over.
+    #[serde(default)]
+    pub roll_first: bool,
+}
+
+/// `rough_speed` of a parameter file without it: no cap.
+fn fast() -> f64 {
+    5.0
+}
+
+/// `rough_filter` of a parameter file without it \[s\].
+fn rough_filter() -> f64 {
+    0.3
 }
 
 /// `crouch_stand_above` of a parameter file without it: never, the crawl as it was.
@@ -230,7 +262,10 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 54] = [
+        let ranges: [(&'static str, f64, f64, f64); 57] = [
+            ("rough_step", self.rough_step, 0.005, 4.0),
+            ("rough_speed", self.rough_speed, 0.0, 5.0),
+            ("rough_filter", self.rough_filter, 0.01, 5.0),
             ("crouch_stand_above", self.crouch_stand_above, 0.2, 4.0),
             ("max_side_speed", self.max_side_speed, 0.0, 5.0),
             ("up_squat_hip", self.up_squat_hip, -2.4, 0.6),
@@ -501,6 +536,8 @@ pub(crate) struct CrawlGait {
     /// Whether the crawl is still turning towards the plan after the get-down (see
     /// `max_side_speed`).
     aligning: bool,
+    /// Low-passed share of rough ground under the body, 0-1 (see `rough_step`).
+    rough: f64,
     last_wrench: RootWrench,
 }
 
@@ -532,6 +569,7 @@ impl CrawlGait {
             v_filt: [0.0; 2],
             v_slip: [0.0; 2],
             aligning: false,
+            rough: 0.0,
             last_wrench: RootWrench::default(),
         }
     }
@@ -653,6 +691,34 @@ impl CrawlGait {
         ]
     }
 
+    /// Largest distance of a height map sample from the map's least-squares plane
+    /// \[m\]: a step or bump, not a slope.
+    fn roughness(obs: &Observation) -> f64 {
+        let half = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
+        let n = LOCAL_MAP_SIDE * LOCAL_MAP_SIDE;
+        let coord = |i: usize| (i as f64 - half) * LOCAL_MAP_SPACING;
+        // The grid is symmetric about its centre: the plane's terms separate.
+        let (mut mean, mut sx, mut sy, mut sxx) = (0.0, 0.0, 0.0, 0.0);
+        for r in 0..LOCAL_MAP_SIDE {
+            for c in 0..LOCAL_MAP_SIDE {
+                let h = obs.height_map[r * LOCAL_MAP_SIDE + c];
+                mean += h;
+                sx += coord(r) * h;
+                sy += coord(c) * h;
+                sxx += coord(r) * coord(r);
+            }
+        }
+        let (mean, gx, gy) = (mean / n as f64, sx / sxx, sy / sxx);
+        let mut worst: f64 = 0.0;
+        for r in 0..LOCAL_MAP_SIDE {
+            for c in 0..LOCAL_MAP_SIDE {
+                let plane = mean + gx * coord(r) + gy * coord(c);
+                worst = worst.max((obs.height_map[r * LOCAL_MAP_SIDE + c] - plane).abs());
+            }
+        }
+        worst
+    }
+
     /// Joint targets with the contacts at `contacts` (heading frame, relative to the
     /// desired pelvis; z absolute relative to the ground under the root).
     fn pose_targets(
@@ -768,7 +834,10 @@ impl CrawlGait {
         // What the plan asks for.
         let wp0 = obs.waypoints[0];
         let wp1 = obs.waypoints[1];
-        let vmax = (1.15 * obs.waypoint_speeds[0].max(0.0) + 0.2).min(p.max_speed);
+        let share = (Self::roughness(obs) / p.rough_step - 1.0).clamp(0.0, 1.0);
+        self.rough += (CONTROL_DT / p.rough_filter).min(1.0) * (share - self.rough);
+        let top = p.max_speed + self.rough * (p.rough_speed.min(p.max_speed) - p.max_speed);
+        let vmax = (1.15 * obs.waypoint_speeds[0].max(0.0) + 0.2).min(top);
         let mut v_plan = [wp0[0] / WAYPOINT_SPACING, wp0[1] / WAYPOINT_SPACING];
         let n = v_plan[0].hypot(v_plan[1]);
         if n > vmax {
@@ -967,11 +1036,21 @@ impl CrawlGait {
             p.height_damping,
             vz,
         );
-        let torque = [
+        let mut torque = [
             -(p.rot_gain * roll + p.rot_damping * wx),
             -(p.rot_gain * (pitch - pitch_des) + p.rot_damping * wy),
             p.yaw_torque_gain * yaw_err + p.rot_damping * (yaw_rate - wz),
         ];
+        if p.roll_first {
+            let cap = self.settings.residual_torque_cap;
+            torque[0] = torque[0].clamp(-cap, cap);
+            let rest = (cap * cap - torque[0] * torque[0]).max(0.0).sqrt();
+            let other = torque[1].hypot(torque[2]);
+            if other > rest {
+                torque[1] *= rest / other;
+                torque[2] *= rest / other;
+            }
+        }
         self.last_wrench = residual_wrench(&self.settings, obs.heading, force, torque, out);
     }
 
@@ -985,6 +1064,7 @@ impl CrawlGait {
         self.v_filt = [0.0; 2];
         self.v_slip = [0.0; 2];
         self.aligning = false;
+        self.rough = 0.0;
     }
 }
 
@@ -1008,6 +1088,92 @@ mod tests {
         assert!(bad.validate().is_err());
         let text = DEFAULT_CRAWL_PARAMS.replace("duty", "dutty");
         assert!(CrawlParams::from_toml(&text, Path::new("x")).is_err());
+    }
+
+    /// A settled crawl asked for 1 m/s straight ahead over a height map; the speed it
+    /// commands after 4 s.
+    fn commanded_speed(params: CrawlParams, map: impl Fn(f64, f64) -> f64) -> f64 {
+        use crate::observation::{NUM_WAYPOINTS, ObservationLayout};
+        let layout = ObservationLayout {
+            num_joints: NUM_JOINTS,
+            num_bodies: BODIES.len(),
+        };
+        let mut obs = Observation::new(layout);
+        obs.root_height = 0.5;
+        for i in 0..NUM_WAYPOINTS {
+            obs.waypoints[i] = [(i + 1) as f64 * WAYPOINT_SPACING, 0.0, 0.0];
+            obs.waypoint_speeds[i] = 1.0;
+        }
+        let half = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
+        for r in 0..LOCAL_MAP_SIDE {
+            for c in 0..LOCAL_MAP_SIDE {
+                let (x, y) = (
+                    (r as f64 - half) * LOCAL_MAP_SPACING,
+                    (c as f64 - half) * LOCAL_MAP_SPACING,
+                );
+                obs.height_map[r * LOCAL_MAP_SIDE + c] = map(x, y);
+            }
+        }
+        let mut gait = CrawlGait::new(params, ControllerSettings::default());
+        gait.reset();
+        let mut out = Action::default();
+        for _ in 0..(4.0 / CONTROL_DT) as usize {
+            gait.act(&obs, &mut out);
+        }
+        gait.v_cmd[0].hypot(gait.v_cmd[1])
+    }
+
+    #[test]
+    fn the_crawl_slows_on_stairs_and_gravel_not_on_slopes() {
+        let shipped = CrawlParams::default();
+        let old = CrawlParams {
+            rough_step: never(),
+            rough_speed: fast(),
+            ..shipped
+        };
+        // The random scenes' steepest stairs, 0.15 m x 0.31 m; a 20 degree side slope.
+        let stairs = |x: f64, _y: f64| 0.15 * (x / 0.31).floor();
+        let slope = |_x: f64, y: f64| 0.36 * y;
+        let full = shipped.max_speed;
+        assert!((commanded_speed(shipped, |_, _| 0.0) - full).abs() < 1e-9);
+        assert!((commanded_speed(shipped, slope) - full).abs() < 1e-9);
+        let on_stairs = commanded_speed(shipped, stairs);
+        assert!(
+            on_stairs <= shipped.rough_speed + 0.05 && on_stairs < full - 0.2,
+            "{on_stairs} m/s on stairs (rough_speed {})",
+            shipped.rough_speed
+        );
+        assert!((commanded_speed(old, stairs) - full).abs() < 1e-9);
+    }
+
+    #[test]
+    fn roll_comes_first_in_the_residual_torque() {
+        use crate::observation::ObservationLayout;
+        let roll_torque = |params: CrawlParams| {
+            let layout = ObservationLayout {
+                num_joints: NUM_JOINTS,
+                num_bodies: BODIES.len(),
+            };
+            let mut obs = Observation::new(layout);
+            obs.root_height = 0.5;
+            // Rolled 0.4 rad (right side low) while the yaw wags at 2 rad/s.
+            let roll: f64 = 0.4;
+            obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
+            obs.root_ang_vel = [0.0, 0.0, 2.0];
+            let mut gait = CrawlGait::new(params, ControllerSettings::default());
+            gait.reset();
+            gait.act(&obs, &mut Action::default());
+            gait.last_wrench().torque[0]
+        };
+        let cap = ControllerSettings::default().residual_torque_cap;
+        let shipped = CrawlParams::default();
+        assert!(shipped.roll_first);
+        assert!((roll_torque(shipped) + cap).abs() < 1e-9);
+        let shared = roll_torque(CrawlParams {
+            roll_first: false,
+            ..shipped
+        });
+        assert!(shared > -0.7 * cap, "{shared}");
     }
 
     #[test]
