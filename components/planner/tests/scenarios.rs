@@ -633,22 +633,30 @@ fn bad_host_obstacles_are_rejected_naming_the_obstacle() {
     assert_eq!(p.external_obstacles(), &[ok]);
 }
 
-/// The pyramid scene's 40 m x 30 m yard flat, but for a berm 0.6 m high across it at
-/// x = 20 with faces of `face_deg`, from y = 0 to 26: the way round is through the gap
-/// at y 26-30, 7.6 m longer than straight over.
-fn berm_scene(face_deg: f64) -> Scene {
+/// The pyramid scene's 40 m x 30 m yard with the ground height `ground(x, y)` \[m\].
+fn yard(ground: impl Fn(f64, f64) -> f64) -> Scene {
     let mut s = pyramid_scene(0.0);
     let t = &mut s.terrain;
     for j in 0..t.ny {
         for i in 0..t.nx {
             let [x, y] = t.position(i, j);
-            if y <= 26.0 {
-                t.heights[j * t.nx + i] =
-                    (0.6 - (x - 20.0).abs() * face_deg.to_radians().tan()).max(0.0);
-            }
+            t.heights[j * t.nx + i] = ground(x, y);
         }
     }
     s
+}
+
+/// The yard flat, but for a berm 0.6 m high across it at x = 20 with faces of
+/// `face_deg`, from y = 0 to 26: the way round is through the gap at y 26-30, 7.6 m
+/// longer than straight over.
+fn berm_scene(face_deg: f64) -> Scene {
+    yard(|x, y| {
+        if y <= 26.0 {
+            (0.6 - (x - 20.0).abs() * face_deg.to_radians().tan()).max(0.0)
+        } else {
+            0.0
+        }
+    })
 }
 
 #[test]
@@ -687,15 +695,10 @@ fn a_face_steeper_than_max_slope_is_walked_around() {
 fn a_step_on_a_slope_is_still_a_step() {
     // The yard rises at 20 degrees from x = 18, with a 0.2 m step across it at x = 20
     // (a stair on a ramp, or a ledge where terrain tiles meet): no way round.
-    let mut scene = pyramid_scene(0.0);
-    let t = &mut scene.terrain;
-    for j in 0..t.ny {
-        for i in 0..t.nx {
-            let [x, _] = t.position(i, j);
-            let step = if x >= 20.0 { 0.2 } else { 0.0 };
-            t.heights[j * t.nx + i] = (x - 18.0).max(0.0) * 20f64.to_radians().tan() + step;
-        }
-    }
+    let scene = yard(|x, _| {
+        let step = if x >= 20.0 { 0.2 } else { 0.0 };
+        (x - 18.0).max(0.0) * 20f64.to_radians().tan() + step
+    });
     // Over half a baseline the step and the ramp together rise 41 degrees; the step
     // taken out, 20.
     let p = Planner::new(
@@ -711,14 +714,7 @@ fn a_step_on_a_slope_is_still_a_step() {
 fn a_path_keeps_off_a_cliff_as_off_a_wall() {
     // North of y = 15.25 the yard is a plateau 0.4 m up (above max_step_height, so no
     // edge climbs it); the straight way from west to east runs 0.25 m from its foot.
-    let mut scene = pyramid_scene(0.0);
-    let t = &mut scene.terrain;
-    for j in 0..t.ny {
-        for i in 0..t.nx {
-            let [_, y] = t.position(i, j);
-            t.heights[j * t.nx + i] = if y > 15.25 { 0.4 } else { 0.0 };
-        }
-    }
+    let scene = yard(|_, y| if y > 15.25 { 0.4 } else { 0.0 });
     let closest = |cliff_clearance: f64| {
         let p = Planner::new(
             scene.clone(),
