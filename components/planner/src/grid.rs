@@ -149,7 +149,7 @@ pub(crate) fn crawl_body_clear(
     })
 }
 
-/// Clear `free` (a grid of `dims` cells `res` apart over `t`'s origin) within
+/// Clear `free` (a grid of `nx` x `ny` cells `res` apart from `t`'s origin) within
 /// `cliff_clearance` of every cliff of `t`: the midpoint of two neighbouring terrain
 /// samples whose heights differ by more than `max_step_height`.
 fn keep_off_cliffs(
