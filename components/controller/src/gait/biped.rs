@@ -29,6 +29,7 @@
 //!   height and tilt; it is part of the action and reported by the metrics.
 
 use super::ik::{LegGeometry, leg_ik};
+use super::map_plane::MapPlane;
 use super::params::GaitParams;
 
 use plamo_interfaces::CONTROL_DT;
@@ -288,16 +289,7 @@ impl<'a> Ground<'a> {
     /// Least-squares slope (rise over run, forward) of the height map's row means: the
     /// ramp under the feet, with gravel and tread noses averaged out.
     fn map_slope(&self) -> f64 {
-        let n = LOCAL_MAP_SIDE as f64;
-        let half = (n - 1.0) / 2.0;
-        let (mut sxy, mut sxx) = (0.0, 0.0);
-        for r in 0..LOCAL_MAP_SIDE {
-            let x = (r as f64 - half) * LOCAL_MAP_SPACING;
-            let row = &self.map[r * LOCAL_MAP_SIDE..(r + 1) * LOCAL_MAP_SIDE];
-            sxy += x * row.iter().sum::<f64>() / n;
-            sxx += x * x;
-        }
-        sxy / sxx
+        MapPlane::fit(self.map).forward
     }
 
     /// Highest ground a sole sweeps from ankle point `a` to `b` above the plane of

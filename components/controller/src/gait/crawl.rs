@@ -39,6 +39,7 @@ use plamo_physics::NUM_JOINTS;
 use plamo_physics::humanoid::{BODIES, JOINTS, body_index, joint_index};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
+use super::map_plane::{MapPlane, map_coord};
 use super::params::{parse_toml, read_params};
 use super::{residual_force, residual_wrench};
 use crate::error::{ControllerError, Result};
@@ -694,26 +695,12 @@ impl CrawlGait {
     /// Largest distance of a height map sample from the map's least-squares plane
     /// \[m\]: a step or bump, not a slope.
     fn roughness(obs: &Observation) -> f64 {
-        let half = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
-        let n = LOCAL_MAP_SIDE * LOCAL_MAP_SIDE;
-        let coord = |i: usize| (i as f64 - half) * LOCAL_MAP_SPACING;
-        // The grid is symmetric about its centre: the plane's terms separate.
-        let (mut mean, mut sx, mut sy, mut sxx) = (0.0, 0.0, 0.0, 0.0);
-        for r in 0..LOCAL_MAP_SIDE {
-            for c in 0..LOCAL_MAP_SIDE {
-                let h = obs.height_map[r * LOCAL_MAP_SIDE + c];
-                mean += h;
-                sx += coord(r) * h;
-                sy += coord(c) * h;
-                sxx += coord(r) * coord(r);
-            }
-        }
-        let (mean, gx, gy) = (mean / n as f64, sx / sxx, sy / sxx);
+        let plane = MapPlane::fit(&obs.height_map);
         let mut worst: f64 = 0.0;
         for r in 0..LOCAL_MAP_SIDE {
             for c in 0..LOCAL_MAP_SIDE {
-                let plane = mean + gx * coord(r) + gy * coord(c);
-                worst = worst.max((obs.height_map[r * LOCAL_MAP_SIDE + c] - plane).abs());
+                let h = obs.height_map[r * LOCAL_MAP_SIDE + c];
+                worst = worst.max((h - plane.at(map_coord(r), map_coord(c))).abs());
             }
         }
         worst
@@ -1104,14 +1091,9 @@ mod tests {
             obs.waypoints[i] = [(i + 1) as f64 * WAYPOINT_SPACING, 0.0, 0.0];
             obs.waypoint_speeds[i] = 1.0;
         }
-        let half = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
         for r in 0..LOCAL_MAP_SIDE {
             for c in 0..LOCAL_MAP_SIDE {
-                let (x, y) = (
-                    (r as f64 - half) * LOCAL_MAP_SPACING,
-                    (c as f64 - half) * LOCAL_MAP_SPACING,
-                );
-                obs.height_map[r * LOCAL_MAP_SIDE + c] = map(x, y);
+                obs.height_map[r * LOCAL_MAP_SIDE + c] = map(map_coord(r), map_coord(c));
             }
         }
         let mut gait = CrawlGait::new(params, ControllerSettings::default());

@@ -11,6 +11,7 @@
 mod biped;
 mod crawl;
 mod ik;
+mod map_plane;
 mod params;
 
 pub use crawl::{CRAWL_PARAMS_VERSION, CrawlParams, DEFAULT_CRAWL_PARAMS};
