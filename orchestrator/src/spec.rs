@@ -58,9 +58,9 @@ pub struct ControllerParams {
 }
 
 impl ControllerParams {
-    /// Read the files of `files` (its `planner` is not the controller's); an error
-    /// names the file.
-    pub fn load(files: &ParamFiles) -> Result<Self, String> {
+    /// Read a gait and a crawl parameter file (`None`: built in); an error names the
+    /// file.
+    pub fn load(gait: Option<&Path>, crawl: Option<&Path>) -> Result<Self, String> {
         fn named<T, E: std::fmt::Display>(
             what: &str,
             path: &Path,
@@ -77,14 +77,10 @@ impl ControllerParams {
             })
         }
         Ok(Self {
-            gait: files
-                .gait
-                .as_deref()
+            gait: gait
                 .map(|p| named("gait", p, GaitParams::load(p)))
                 .transpose()?,
-            crawl: files
-                .crawl
-                .as_deref()
+            crawl: crawl
                 .map(|p| named("crawl", p, CrawlParams::load(p)))
                 .transpose()?,
         })
@@ -209,7 +205,9 @@ impl RunSpec {
 
     /// Agent `k`'s controller: the model-based policy with the spec's parameter files.
     pub fn controller(&self, scene: &Scene, k: usize) -> Result<ControllerComponent, RunError> {
-        let params = ControllerParams::load(&self.params).map_err(setup)?;
+        let params =
+            ControllerParams::load(self.params.gait.as_deref(), self.params.crawl.as_deref())
+                .map_err(setup)?;
         controller_with(scene, k, params)
     }
 

@@ -89,11 +89,10 @@ impl SweepArgs {
             .map(plamo::spec::load_planner_settings)
             .transpose()
             .map_err(anyhow::Error::msg)?;
-        let controller = plamo::spec::ControllerParams::load(&plamo::spec::ParamFiles {
-            gait: self.gait_params.clone(),
-            crawl: self.crawl_params.clone(),
-            planner: None,
-        })
+        let controller = plamo::spec::ControllerParams::load(
+            self.gait_params.as_deref(),
+            self.crawl_params.as_deref(),
+        )
         .map_err(anyhow::Error::msg)?;
         Ok(RunOptions {
             physics: self.physics,

@@ -71,11 +71,10 @@ impl SpecArgs {
         if let Some(f) = &self.planner_params {
             plamo::spec::load_planner_settings(f).map_err(anyhow::Error::msg)?;
         }
-        plamo::spec::ControllerParams::load(&ParamFiles {
-            gait: self.gait_params.clone(),
-            crawl: self.crawl_params.clone(),
-            planner: None,
-        })
+        plamo::spec::ControllerParams::load(
+            self.gait_params.as_deref(),
+            self.crawl_params.as_deref(),
+        )
         .map_err(anyhow::Error::msg)?;
         Ok(RunSpec {
             scene: self.scene.clone(),
