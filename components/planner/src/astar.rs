@@ -14,6 +14,44 @@ pub struct SearchLimits {
     /// Where the crawling body's footprint must fit the step's heading
     /// ([`PlanGrid::body_fits`]).
     pub crawl_body: CrawlBody,
+    /// The leg's posture, for the cost of lowering the head under tops
+    /// ([`PlanGrid::head_cost`]).
+    pub posture: Posture,
+}
+
+/// How a leg carries its head, as far as tops cost it something to pass under.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Posture {
+    /// Crawling (or no cost asked for): a top costs nothing.
+    #[default]
+    Crawl,
+    /// Crouch-walking: a top it must crawl under costs `crawl_zone_cost`.
+    Crouch,
+    /// Walking, running, sprinting: a top it must crouch under costs
+    /// `stoop_zone_cost`, one it must crawl under `crawl_zone_cost`.
+    Standing,
+}
+
+impl Posture {
+    /// The posture of a leg in `form`.
+    pub fn of(form: crate::Locomotion) -> Self {
+        use crate::Locomotion::*;
+        match form {
+            Crawl => Self::Crawl,
+            CrouchWalk => Self::Crouch,
+            Walk | Run | Sprint => Self::Standing,
+        }
+    }
+
+    /// Extra cost per metre at cell `c` of `g` for this posture \[1\].
+    #[inline]
+    pub(crate) fn head_cost(self, g: &PlanGrid, c: usize) -> f64 {
+        match self {
+            Self::Crawl => 0.0,
+            Self::Crouch => f64::from(g.head_cost[0][c]),
+            Self::Standing => f64::from(g.head_cost[1][c]),
+        }
+    }
 }
 
 /// Where a search keeps the crawling body's footprint clear of walls.
@@ -73,17 +111,30 @@ pub(crate) fn crawl_applies(g: &PlanGrid, rule: CrawlBody, a: usize, b: usize) -
     }
 }
 
+/// Length of a step in direction `DIRS[d]` \[m\].
+#[inline]
+fn step_length(g: &PlanGrid, d: usize) -> f64 {
+    if d % 4 >= 2 {
+        g.resolution * std::f64::consts::SQRT_2
+    } else {
+        g.resolution
+    }
+}
+
 /// Extra cost of a crawled step from `a` to `b` (direction `DIRS[d]`) over uneven
 /// ground: its length times `crawl_relief_cost` times the relief at both ends
 /// (mean) \[m\].
 #[inline]
 pub(crate) fn relief_cost(g: &PlanGrid, a: usize, b: usize, d: usize) -> f64 {
-    let len = if d % 4 >= 2 {
-        g.resolution * std::f64::consts::SQRT_2
-    } else {
-        g.resolution
-    };
-    len * g.relief_cost * 0.5 * (g.relief[a] + g.relief[b]) as f64
+    step_length(g, d) * g.relief_cost * 0.5 * (g.relief[a] + g.relief[b]) as f64
+}
+
+/// Extra cost of a step from `a` to `b` (direction `DIRS[d]`) where a top makes a
+/// leg of `posture` lower its head: its length times the mean of both ends'
+/// [`PlanGrid::head_cost`] \[m\].
+#[inline]
+pub(crate) fn head_cost(g: &PlanGrid, posture: Posture, a: usize, b: usize, d: usize) -> f64 {
+    step_length(g, d) * 0.5 * (posture.head_cost(g, a) + posture.head_cost(g, b))
 }
 
 /// A found path: cells from start to goal and its cost.
@@ -294,6 +345,9 @@ impl AStar {
                 let mut gb = gc + w as f64;
                 if g.has_relief && crawl_applies(g, limits.crawl_body, c, b) {
                     gb += relief_cost(g, c, b, d);
+                }
+                if g.has_head_cost {
+                    gb += head_cost(g, limits.posture, c, b, d);
                 }
                 let nb = &mut self.node[b];
                 // A closed cell is re-opened when reached cheaper: the ALT bound
@@ -694,6 +748,7 @@ mod tests {
                         rng.random_range(2 * ny / 3..ny),
                     )),
                     crawl_body: CrawlBody::Off,
+                    posture: Posture::Crawl,
                 }
             } else {
                 // Dijkstra knows nothing of the crawling body's footprint, a rule

@@ -54,6 +54,13 @@ pub struct PlanGrid {
     pub has_relief: bool,
     /// `PlannerSettings::crawl_relief_cost` \[1/m\].
     pub relief_cost: f64,
+    /// Extra cost per metre of path \[1\] where a top makes a leg lower its head
+    /// below its form's (`PlannerSettings::crawl_zone_cost`, `stoop_zone_cost`), by
+    /// [`Posture`](crate::Posture): index 0 a crouch-walk leg, 1 a standing one. Empty when both
+    /// costs are off.
+    pub head_cost: [Vec<f32>; 2],
+    /// Whether any cell has a `head_cost` (lets searches skip it).
+    pub has_head_cost: bool,
     /// Edge cost per cell and direction `DIRS[d]`, `INFINITY` when the edge is off
     /// the grid or removed (wall, corner cut, infeasible slope) \[m\].
     pub edges: Vec<[f32; 8]>,
@@ -287,27 +294,58 @@ impl PlanGrid {
         // A head limited below the crawl switch means crawling, and the body trails
         // the head by its length.
         let crawl_head = (s.crawl_switch_height + s.head_margin) as f32;
-        let mut crawl_zone = vec![false; n];
-        let rr = (s.crawl_body_length / res).ceil() as isize;
-        for (c, &hr) in headroom.iter().enumerate() {
-            if hr >= crawl_head {
-                continue;
-            }
-            let (ci, cj) = ((c % nx) as isize, (c / nx) as isize);
-            for dj in -rr..=rr {
-                for di in -rr..=rr {
-                    let (i, j) = (ci + di, cj + dj);
-                    if i >= 0
-                        && j >= 0
-                        && (i as usize) < nx
-                        && (j as usize) < ny
-                        && di * di + dj * dj <= rr * rr
-                    {
-                        crawl_zone[j as usize * nx + i as usize] = true;
+        // Cells within `radius` of a cell whose headroom is below `below`.
+        let near_tops = |below: f32, radius: f64| {
+            let mut near = vec![false; n];
+            let rr = (radius / res).ceil() as isize;
+            for (c, &hr) in headroom.iter().enumerate() {
+                if hr >= below {
+                    continue;
+                }
+                let (ci, cj) = ((c % nx) as isize, (c / nx) as isize);
+                for dj in -rr..=rr {
+                    for di in -rr..=rr {
+                        let (i, j) = (ci + di, cj + dj);
+                        if i >= 0
+                            && j >= 0
+                            && (i as usize) < nx
+                            && (j as usize) < ny
+                            && di * di + dj * dj <= rr * rr
+                        {
+                            near[j as usize * nx + i as usize] = true;
+                        }
                     }
                 }
             }
-        }
+            near
+        };
+        let crawl_zone = near_tops(crawl_head, s.crawl_body_length);
+        // The plan's head comes down within `crawl_body_length` of a top to crawl
+        // under and within `character_radius` of one to crouch under
+        // (`refine::head_limit`); a route that skirted those edges would dip under
+        // wherever smoothing moved it a few centimetres, so it pays from a character
+        // radius further out.
+        let head_cost = if s.crawl_zone_cost > 0.0 || s.stoop_zone_cost > 0.0 {
+            let crawl = near_tops(crawl_head, s.crawl_body_length + s.character_radius);
+            let stoop = near_tops(
+                (s.stand_height + s.stoop_margin) as f32,
+                2.0 * s.character_radius,
+            );
+            let (kc, ks) = (s.crawl_zone_cost as f32, s.stoop_zone_cost as f32);
+            let crouch_leg = crawl.iter().map(|&c| if c { kc } else { 0.0 }).collect();
+            let standing_leg = crawl
+                .iter()
+                .zip(&stoop)
+                .map(|(&c, &st)| match (c, st) {
+                    (true, _) => kc,
+                    (false, true) => ks,
+                    _ => 0.0,
+                })
+                .collect();
+            [crouch_leg, standing_leg]
+        } else {
+            [Vec::new(), Vec::new()]
+        };
         // Relief: separable sliding max and min over a square window.
         let k = ((s.crawl_half_width / res).ceil() as usize + 1).max(1);
         let mut hi_x = vec![0.0f64; n];
@@ -388,6 +426,7 @@ impl PlanGrid {
             }
         }
         let has_tops = headroom.iter().any(|h| h.is_finite());
+        let has_head_cost = head_cost.iter().flatten().any(|&k| k > 0.0);
         Self {
             origin,
             resolution: res,
@@ -401,6 +440,8 @@ impl PlanGrid {
             relief,
             has_relief,
             relief_cost: s.crawl_relief_cost,
+            head_cost,
+            has_head_cost,
             headroom,
             free,
             edges,

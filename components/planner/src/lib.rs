@@ -29,7 +29,7 @@ pub mod synthetic;
 mod timing;
 
 pub use alt::{ALT_ACTIVE, AltLandmarks};
-pub use astar::{AStar, CrawlBody, GridPath, Heuristic, SearchLimits};
+pub use astar::{AStar, CrawlBody, GridPath, Heuristic, Posture, SearchLimits};
 pub use component::{FLAG_FINISHED, FLAG_INFEASIBLE, FLAG_REPLANNED, PlannerComponent};
 pub use connectivity::{BLOCKED, Components};
 pub use dynamic::{

@@ -9,7 +9,7 @@ use plamo_scenes::{ObstacleState, Region, Scene};
 use serde::{Deserialize, Serialize};
 
 use crate::alt::AltLandmarks;
-use crate::astar::{AStar, CrawlBody, GridPath, SearchLimits};
+use crate::astar::{AStar, CrawlBody, GridPath, Posture, SearchLimits};
 use crate::connectivity::Components;
 use crate::dynamic::{Conflict, External, ExternalObstacle, Prediction, predict_conflict_with};
 use crate::grid::PlanGrid;
@@ -290,6 +290,7 @@ impl Planner {
         form: Locomotion,
     ) -> Option<(GridPath, SearchLimits)> {
         let mut limits = limits.clone();
+        limits.posture = Posture::of(form);
         if form == Locomotion::Crawl && limits.crawl_body == CrawlBody::Zone {
             limits.crawl_body = CrawlBody::Everywhere;
         }

@@ -148,6 +148,11 @@ impl RefineCtx<'_> {
             let h = self.scene.height_at(x, y);
             cost += edge_cost(self.settings, dxy.max(1e-9), h - h_prev)?;
             cost += dxy * self.relief_at(x, y);
+            if self.grid.has_head_cost
+                && let Some(c) = self.grid.cell_of(x, y)
+            {
+                cost += dxy * self.limits.posture.head_cost(self.grid, c);
+            }
             h_prev = h;
         }
         Some(cost)

@@ -100,6 +100,23 @@ pub struct PlannerSettings {
     /// times its length and a flat strip a metre away is taken instead. 0 disables.
     /// Default 20.
     pub crawl_relief_cost: f64,
+    /// Cost of crawling under a low top on a leg that is not a crawl (not in the
+    /// paper) \[1\]: on a walk, run or crouch-walk leg, each metre of path in the
+    /// crawl zone (under a top that puts the head below `crawl_switch_height`, or
+    /// within `crawl_body_length` of one) costs this many metres on top of its edge
+    /// cost, so a route goes around a low top where the detour is short. Crawling
+    /// there costs the body a get-down and a get-up (1.5-2 s each) and a crawl at a
+    /// quarter of a walk's speed, and a standing leg's falls came there. 0 disables
+    /// (the paper's planner, which lowers the head under any top on the way).
+    /// Default 0.
+    pub crawl_zone_cost: f64,
+    /// Cost of crouching under a top on a walk, run or sprint leg (not in the
+    /// paper) \[1\]: each metre of such a leg within `character_radius` of a top
+    /// that leaves no room to stand (below `stand_height` + `stoop_margin`), and a
+    /// character radius further out, costs this many metres on top of its edge
+    /// cost (`crawl_zone_cost` instead where the top makes it crawl). 0 disables.
+    /// Default 0.
+    pub stoop_zone_cost: f64,
     /// Top speed walking \[m/s\]. Default 2.0.
     pub walk_speed: f64,
     /// Top speed running \[m/s\]. Default 4.0.
@@ -212,6 +229,8 @@ impl Default for PlannerSettings {
             goal_depth: 0.4,
             crawl_turn_rate: 0.5,
             crawl_relief_cost: 20.0,
+            crawl_zone_cost: 0.0,
+            stoop_zone_cost: 0.0,
             walk_speed: 2.0,
             run_speed: 4.0,
             sprint_speed: 5.0,
@@ -296,6 +315,8 @@ impl PlannerSettings {
             ("slope_baseline", self.slope_baseline),
             ("slope_preference_c", self.slope_preference_c),
             ("crawl_relief_cost", self.crawl_relief_cost),
+            ("crawl_zone_cost", self.crawl_zone_cost),
+            ("stoop_zone_cost", self.stoop_zone_cost),
             ("height_cost", self.height_cost),
             ("max_step_height", self.max_step_height),
             ("cliff_clearance", self.cliff_clearance),

@@ -1,0 +1,133 @@
+//! A leg whose straight line runs under a 3 m x 3 m top, at 0.6 m (a crawl there) or
+//! 0.9 m (a crouch): with `crawl_zone_cost` and `stoop_zone_cost` a walk goes around
+//! the top, a leg already that low is not affected, and where no way leads around
+//! the route still goes under it.
+
+use plamo_planner::{Planner, PlannerSettings, Trajectory};
+use plamo_scenes::{Footprint, HeightGrid, Landmark, Region, Scene, TopObstacle, Wall};
+
+/// A 24 m x 12 m flat field, landmarks west (3, 6) and east (21, 6), a top over
+/// (12, 6) `clearance` \[m\] above the ground; with `fenced`, walls from the top's
+/// north and south sides to the field's edges leave the way under it the only one.
+fn field(clearance: f64, fenced: bool) -> Scene {
+    let circle = |name: &str, c: [f64; 2]| Landmark {
+        name: name.into(),
+        region: Region::Circle {
+            center: c,
+            radius: 1.0,
+        },
+    };
+    let wall = |name: &str, y0: f64, y1: f64| Wall {
+        name: name.into(),
+        footprint: Footprint::axis_aligned([12.0, 0.5 * (y0 + y1)], [0.15, 0.5 * (y1 - y0)]),
+        z_min: -1.0,
+        z_max: 2.0,
+    };
+    Scene {
+        name: "field".into(),
+        description: "a low top across the straight line between two landmarks".into(),
+        terrain: HeightGrid::flat([0.0, 0.0], [24.0, 12.0], 0.1, 0.0),
+        walls: if fenced {
+            vec![wall("north", 7.5, 12.0), wall("south", 0.0, 4.5)]
+        } else {
+            vec![]
+        },
+        dynamic: vec![],
+        tops: vec![TopObstacle {
+            name: "shed".into(),
+            footprint: Footprint::axis_aligned([12.0, 6.0], [1.5, 1.5]),
+            z_bottom: clearance,
+            z_top: clearance + 0.2,
+        }],
+        landmarks: vec![circle("west", [3.0, 6.0]), circle("east", [21.0, 6.0])],
+    }
+}
+
+fn plan(scene: Scene, form: &str, zone_cost: f64) -> Trajectory {
+    let settings = PlannerSettings {
+        crawl_zone_cost: zone_cost,
+        stoop_zone_cost: zone_cost,
+        ..Default::default()
+    };
+    let p = Planner::new(
+        scene,
+        &format!("{form} from the west to the east"),
+        [3.0, 6.0],
+        settings,
+    )
+    .unwrap();
+    p.route()[0].clone()
+}
+
+fn lowest_head(t: &Trajectory) -> f64 {
+    t.points
+        .iter()
+        .map(|p| p.head_height)
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn a_walk_goes_around_a_low_top_when_crawling_costs() {
+    let through = plan(field(0.6, false), "walk", 0.0);
+    assert!(
+        lowest_head(&through) < 0.6,
+        "without the cost the walk crawls under the top: lowest head {:.2} m",
+        lowest_head(&through)
+    );
+    let around = plan(field(0.6, false), "walk", 2.0);
+    assert!(
+        lowest_head(&around) > 1.4,
+        "with the cost the walk stays on its feet: lowest head {:.2} m",
+        lowest_head(&around)
+    );
+    // A detour, not a wander: longer, but by less than the crawl zone is wide.
+    let (l0, l1) = (through.length(), around.length());
+    assert!(l1 > l0 && l1 < l0 + 4.0, "lengths {l0:.2} -> {l1:.2} m");
+    // And faster: the crawl and its get-down and get-up are gone.
+    assert!(
+        around.duration() < through.duration(),
+        "durations {:.1} -> {:.1} s",
+        through.duration(),
+        around.duration()
+    );
+}
+
+#[test]
+fn a_crawl_leg_is_not_charged_for_crawling() {
+    assert_eq!(
+        plan(field(0.6, false), "crawl", 0.0),
+        plan(field(0.6, false), "crawl", 2.0)
+    );
+}
+
+#[test]
+fn with_no_way_around_the_walk_still_crawls_under() {
+    let t = plan(field(0.6, true), "walk", 2.0);
+    assert!(
+        lowest_head(&t) < 0.6,
+        "lowest head {:.2} m",
+        lowest_head(&t)
+    );
+    assert_eq!(t, plan(field(0.6, true), "walk", 2.0));
+}
+
+#[test]
+fn a_walk_goes_around_a_top_it_would_crouch_under_and_a_crouch_walk_does_not() {
+    let through = plan(field(0.9, false), "walk", 0.0);
+    let lowest = lowest_head(&through);
+    assert!(
+        (0.75..0.85).contains(&lowest),
+        "without the cost the walk crouches under the top: lowest head {lowest:.2} m"
+    );
+    let around = plan(field(0.9, false), "walk", 2.0);
+    assert!(
+        lowest_head(&around) > 1.4,
+        "with the cost the walk stays upright: lowest head {:.2} m",
+        lowest_head(&around)
+    );
+    assert!(around.length() < through.length() + 3.0);
+    assert_eq!(
+        plan(field(0.9, false), "crouch-walk", 0.0),
+        plan(field(0.9, false), "crouch-walk", 2.0)
+    );
+}
