@@ -29,7 +29,8 @@
 //!   wrench holding height rate and attitude.
 //! - A bounded residual root wrench (capped by [`ControllerSettings`]) helps with
 //!   speed, height and attitude (its torque budget to roll first with `roll_first`,
-//!   off in the shipped file); it is reported like the biped's.
+//!   from a roll of `roll_first_from`, or to yaw last with `yaw_last`; all off in the
+//!   shipped file); it is reported like the biped's.
 
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
@@ -211,6 +212,18 @@ pub struct CrawlParams {
     /// while the body rolled over.
     #[serde(default)]
     pub roll_first: bool,
+    /// Roll magnitude where `roll_first` starts to take over \[rad\]: below it the
+    /// three torques share the cap as without `roll_first`, at twice it roll comes
+    /// first fully, blended linearly between (0: roll first at any roll). On gravel and
+    /// stairs the rapier crawl needs its pitch torque while it is level; roll needs the
+    /// budget only once the body leans.
+    #[serde(default)]
+    pub roll_first_from: f64,
+    /// Yaw last in the residual torque's budget: roll and pitch share the cap first
+    /// and the yaw torque gets what they leave. The yaw wag on stairs (rate damping at
+    /// +-2 rad/s) alone asks for more than the cap.
+    #[serde(default)]
+    pub yaw_last: bool,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -226,6 +239,64 @@ fn rough_filter() -> f64 {
 /// `crouch_stand_above` of a parameter file without it: never, the crawl as it was.
 fn never() -> f64 {
     4.0
+}
+
+/// Splits the residual torque's norm `cap` \[N m\] between roll, pitch and yaw
+/// (heading frame) by the priorities `roll_first`, `roll_first_from` and `yaw_last`
+/// of `p`, at a body roll of `roll` \[rad\]. The result's norm never exceeds `cap`:
+/// the blend of two vectors inside the cap's ball stays inside it.
+fn share_torque(p: &CrawlParams, cap: f64, roll: f64, torque: [f64; 3]) -> [f64; 3] {
+    // Gives `first` the budget, then `second` what it leaves, the rest to `third`
+    // (components by index; `second` may be two components sharing as one).
+    fn clamp_to(v: &mut [f64], budget: f64) -> f64 {
+        let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if n > budget {
+            v.iter_mut().for_each(|x| *x *= budget / n);
+        }
+        (budget * budget - v.iter().map(|x| x * x).sum::<f64>())
+            .max(0.0)
+            .sqrt()
+    }
+    if !p.roll_first && !p.yaw_last {
+        // `residual_wrench` caps the norm, as before these switches.
+        return torque;
+    }
+    let base = if p.yaw_last {
+        let mut rp = [torque[0], torque[1]];
+        let rest = clamp_to(&mut rp, cap);
+        let mut y = [torque[2]];
+        clamp_to(&mut y, rest);
+        [rp[0], rp[1], y[0]]
+    } else {
+        let mut t = torque;
+        clamp_to(&mut t, cap);
+        t
+    };
+    if !p.roll_first {
+        return base;
+    }
+    let w = if p.roll_first_from > 0.0 {
+        (roll.abs() / p.roll_first_from - 1.0).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    if w == 0.0 {
+        return base;
+    }
+    let mut r = [torque[0]];
+    let rest = clamp_to(&mut r, cap);
+    let first = if p.yaw_last {
+        let mut pi = [torque[1]];
+        let rest = clamp_to(&mut pi, rest);
+        let mut y = [torque[2]];
+        clamp_to(&mut y, rest);
+        [r[0], pi[0], y[0]]
+    } else {
+        let mut py = [torque[1], torque[2]];
+        clamp_to(&mut py, rest);
+        [r[0], py[0], py[1]]
+    };
+    [0, 1, 2].map(|i| base[i] + w * (first[i] - base[i]))
 }
 
 impl Default for CrawlParams {
@@ -263,7 +334,8 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 57] = [
+        let ranges: [(&'static str, f64, f64, f64); 58] = [
+            ("roll_first_from", self.roll_first_from, 0.0, 1.5),
             ("rough_step", self.rough_step, 0.005, 4.0),
             ("rough_speed", self.rough_speed, 0.0, 5.0),
             ("rough_filter", self.rough_filter, 0.01, 5.0),
@@ -1023,21 +1095,12 @@ impl CrawlGait {
             p.height_damping,
             vz,
         );
-        let mut torque = [
+        let torque = [
             -(p.rot_gain * roll + p.rot_damping * wx),
             -(p.rot_gain * (pitch - pitch_des) + p.rot_damping * wy),
             p.yaw_torque_gain * yaw_err + p.rot_damping * (yaw_rate - wz),
         ];
-        if p.roll_first {
-            let cap = self.settings.residual_torque_cap;
-            torque[0] = torque[0].clamp(-cap, cap);
-            let rest = (cap * cap - torque[0] * torque[0]).max(0.0).sqrt();
-            let other = torque[1].hypot(torque[2]);
-            if other > rest {
-                torque[1] *= rest / other;
-                torque[2] *= rest / other;
-            }
-        }
+        let torque = share_torque(&p, self.settings.residual_torque_cap, roll, torque);
         self.last_wrench = residual_wrench(&self.settings, obs.heading, force, torque, out);
     }
 
@@ -1107,7 +1170,10 @@ mod tests {
 
     #[test]
     fn rough_speed_slows_the_crawl_on_stairs_not_on_slopes() {
-        let old = CrawlParams::default();
+        let old = CrawlParams {
+            rough_step: 4.0,
+            ..CrawlParams::default()
+        };
         let rough = CrawlParams {
             rough_step: 0.03,
             rough_speed: 0.3,
@@ -1148,14 +1214,74 @@ mod tests {
             gait.last_wrench().torque[0]
         };
         let cap = ControllerSettings::default().residual_torque_cap;
-        let old = CrawlParams::default();
+        let old = CrawlParams {
+            roll_first: false,
+            yaw_last: false,
+            ..CrawlParams::default()
+        };
         let first = roll_torque(CrawlParams {
             roll_first: true,
+            roll_first_from: 0.0,
             ..old
         });
         assert!((first + cap).abs() < 1e-9, "{first}");
         let shared = roll_torque(old);
         assert!(shared > -0.7 * cap, "{shared}");
+    }
+
+    #[test]
+    fn roll_takes_over_the_torque_budget_only_as_the_body_leans() {
+        let cap = 60.0;
+        // Roll, pitch and yaw each asking for most of the cap.
+        let ask = [-50.0, 40.0, 100.0];
+        let p = CrawlParams {
+            roll_first: true,
+            roll_first_from: 0.2,
+            ..CrawlParams::default()
+        };
+        let norm = |t: [f64; 3]| t.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let shared = {
+            let n = norm(ask);
+            ask.map(|x| x * cap / n)
+        };
+        let level = share_torque(&p, cap, 0.1, ask);
+        assert!(
+            level.iter().zip(shared).all(|(a, b)| (a - b).abs() < 1e-9),
+            "{level:?}"
+        );
+        let leaning = share_torque(&p, cap, -0.45, ask);
+        assert!((leaning[0] + 50.0).abs() < 1e-9, "{leaning:?}");
+        let half = share_torque(&p, cap, 0.3, ask);
+        assert!(half[0] < shared[0] - 1.0 && half[0] > -50.0, "{half:?}");
+        for roll in [0.0, 0.1, 0.25, 0.3, 0.35, 0.4, 1.0] {
+            let t = share_torque(&p, cap, roll, ask);
+            assert!(norm(t) <= cap + 1e-9, "{roll}: {t:?}");
+        }
+    }
+
+    #[test]
+    fn yaw_gets_what_roll_and_pitch_leave() {
+        let cap = 60.0;
+        let ask = [-20.0, 30.0, 100.0];
+        let p = CrawlParams {
+            roll_first: false,
+            yaw_last: true,
+            ..CrawlParams::default()
+        };
+        let t = share_torque(&p, cap, 0.1, ask);
+        assert!(
+            (t[0] + 20.0).abs() < 1e-9 && (t[1] - 30.0).abs() < 1e-9,
+            "{t:?}"
+        );
+        let left = (cap * cap - 20.0 * 20.0 - 30.0 * 30.0).sqrt();
+        assert!((t[2] - left).abs() < 1e-9, "{t:?}");
+        // Off, the yaw's request crowds the others out (the norm cap comes later).
+        let off = CrawlParams {
+            roll_first: false,
+            yaw_last: false,
+            ..CrawlParams::default()
+        };
+        assert_eq!(share_torque(&off, cap, 0.1, ask), ask);
     }
 
     #[test]
