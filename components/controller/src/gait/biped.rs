@@ -29,7 +29,7 @@
 //!   height and tilt; it is part of the action and reported by the metrics.
 
 use super::ik::{LegGeometry, leg_ik};
-use super::map_plane::MapPlane;
+use super::map_plane::{MapPlane, map_coord};
 use super::params::GaitParams;
 
 use plamo_interfaces::CONTROL_DT;
@@ -126,6 +126,11 @@ const MAX_HEIGHT_RATE: f64 = 0.5;
 
 /// Bound of the integral foot-placement offset \[m\].
 const FOOT_BIAS_MAX: f64 = 0.15;
+
+/// Height map roughness (largest distance of a sample from the map's best-fit plane)
+/// from which the form's `rough_fwd_gain` starts to act; it acts fully at twice it \[m\].
+/// The crawl's `rough_step` default: gravel and treads are above it, a ramp is not.
+const ROUGH_STEP: f64 = 0.03;
 
 /// Swing-foot clearance above the stance foot's that counts as touchdown \[m\].
 const TOUCHDOWN: f64 = 0.02;
@@ -292,6 +297,20 @@ impl<'a> Ground<'a> {
         MapPlane::fit(self.map).forward
     }
 
+    /// Share of rough ground under the body, 0-1: the height map's largest distance from
+    /// its least-squares plane, from [`ROUGH_STEP`] (0) to twice it (1).
+    fn rough_share(&self) -> f64 {
+        let plane = MapPlane::fit(self.map);
+        let mut worst: f64 = 0.0;
+        for r in 0..LOCAL_MAP_SIDE {
+            for c in 0..LOCAL_MAP_SIDE {
+                let h = self.map[r * LOCAL_MAP_SIDE + c];
+                worst = worst.max((h - plane.at(map_coord(r), map_coord(c))).abs());
+            }
+        }
+        (worst / ROUGH_STEP - 1.0).clamp(0.0, 1.0)
+    }
+
     /// Highest ground a sole sweeps from ankle point `a` to `b` above the plane of
     /// `slope` through the lower of their grounds `ga`, `gb` (0 if none is above).
     fn relief(&self, a: f64, ga: f64, b: f64, gb: f64, y: f64, slope: f64) -> f64 {
@@ -438,8 +457,15 @@ impl BipedGait {
         let final_y = side(swing) * form.foot_width
             + form.foot_lat_gain * vy
             + form.foot_err_gain * (vy - v_des[1]);
+        // Rough ground takes the form's longer steps back (`rough_fwd_gain`); the map
+        // is only scanned where the form asks for it.
+        let fwd_gain = if form.rough_fwd_gain > 0.0 {
+            form.foot_fwd_gain + form.rough_fwd_gain * ground.rough_share()
+        } else {
+            form.foot_fwd_gain
+        };
         let final_xy = [
-            com_x + form.foot_fwd_gain * vx + form.foot_err_gain * (vx - v_des[0]) - self.foot_bias,
+            com_x + fwd_gain * vx + form.foot_err_gain * (vx - v_des[0]) - self.foot_bias,
             final_y,
         ];
         let start = [
@@ -627,6 +653,27 @@ mod tests {
         assert!((g.under_sole(0.0, 0.0) - 0.12).abs() < 1e-12);
         assert!(g.mean_under_sole(0.0, 0.0) < 0.1);
         assert_eq!(g.under_sole(-0.3, 0.0), 0.0);
+    }
+
+    #[test]
+    fn rough_share_sees_steps_and_bumps_but_not_a_ramp() {
+        // A ramp (rise 0.2 per metre) is even ground.
+        let mut ramp = stepped(0.0, 0.0, 0.0);
+        for r in 0..LOCAL_MAP_SIDE {
+            for c in 0..LOCAL_MAP_SIDE {
+                ramp.height_map[r * LOCAL_MAP_SIDE + c] = 0.2 * map_coord(r);
+            }
+        }
+        assert_eq!(Ground::new(&ramp).rough_share(), 0.0);
+        assert_eq!(Ground::new(&stepped(0.0, 0.0, 0.0)).rough_share(), 0.0);
+        // A 0.12 m riser across the map (the stairs strip's) is rough ground.
+        let riser = Ground::new(&stepped(0.12, 0.05, 0.12)).rough_share();
+        assert!(riser > 0.5, "{riser}");
+        // A 0.04 m bump on one sample: part way.
+        let mut bump = stepped(0.0, 0.0, 0.0);
+        bump.height_map[3 * LOCAL_MAP_SIDE + 4] = 0.04;
+        let s = Ground::new(&bump).rough_share();
+        assert!(s > 0.0 && s < 1.0, "{s}");
     }
 
     #[test]
