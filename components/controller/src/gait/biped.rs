@@ -6,7 +6,8 @@
 //! - the form's head height follows the plan at a bounded rate ([`MAX_HEIGHT_RATE`]);
 //! - the swing foot follows a path from its lift-off point to a SIMBICON foot
 //!   placement (ahead of the centre of mass by velocity, velocity error and an
-//!   integral of the speed error, sideways by the lateral velocity) by two-segment leg
+//!   integral of the speed error, further on rough ground and while the pelvis pitches
+//!   forward where the form asks for it, sideways by the lateral velocity) by two-segment leg
 //!   IK; the path is followed kd/kp ahead (the lag of a PD servo behind a moving
 //!   target) plus the form's `swing_lead` (the leg's inertia adds to it); the swing is
 //!   quicker at higher speed (`step_time_per_speed`);
@@ -465,7 +466,8 @@ impl BipedGait {
             form.foot_fwd_gain
         };
         let final_xy = [
-            com_x + fwd_gain * vx + form.foot_err_gain * (vx - v_des[0]) - self.foot_bias,
+            com_x + fwd_gain * vx + form.foot_err_gain * (vx - v_des[0]) - self.foot_bias
+                + form.pitch_fwd_gain * (pitch - pitch_des).max(0.0),
             final_y,
         ];
         let start = [

@@ -97,6 +97,11 @@ pub struct FormParams {
     /// ground its longer steps back. Absent in older files: 0.
     #[serde(default)]
     pub rough_fwd_gain: f64,
+    /// Swing foot placed further ahead per rad of forward pelvis pitch beyond the
+    /// target \[m/rad\]: a body pitching forward in flight needs its next foot out in
+    /// front. Absent in older files: 0.
+    #[serde(default)]
+    pub pitch_fwd_gain: f64,
 }
 
 impl FormParams {
@@ -131,6 +136,7 @@ impl FormParams {
             push_err_gain: l(self.push_err_gain, b.push_err_gain),
             swing_lead: l(self.swing_lead, b.swing_lead),
             rough_fwd_gain: l(self.rough_fwd_gain, b.rough_fwd_gain),
+            pitch_fwd_gain: l(self.pitch_fwd_gain, b.pitch_fwd_gain),
         }
     }
 
@@ -161,6 +167,9 @@ impl FormParams {
         }
         if !(self.rough_fwd_gain >= 0.0 && self.rough_fwd_gain < 0.3) {
             return bad("rough_fwd_gain", "must be in [0, 0.3) s");
+        }
+        if !(self.pitch_fwd_gain >= 0.0 && self.pitch_fwd_gain < 2.0) {
+            return bad("pitch_fwd_gain", "must be in [0, 2) m/rad");
         }
         if !(self.push_err_gain >= 0.0 && self.push_err_gain < 1.0) {
             return bad("push_err_gain", "must be in [0, 1) s");
@@ -285,6 +294,11 @@ mod tests {
         let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
             .unwrap_err();
         assert!(e.to_string().contains("rough_fwd_gain"), "{e}");
+        let mut bad = GaitParams::default();
+        bad.run.pitch_fwd_gain = -0.5;
+        let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
+            .unwrap_err();
+        assert!(e.to_string().contains("pitch_fwd_gain"), "{e}");
         let e =
             GaitParams::from_toml("version = 1\n[walk]\nfoo = 1", Path::new("y.toml")).unwrap_err();
         assert!(e.to_string().contains("y.toml"), "{e}");
