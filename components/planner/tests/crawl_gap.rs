@@ -48,12 +48,17 @@ fn tunnel_scene() -> Scene {
     }
 }
 
+/// The run's plan, crawling through the gap: the fence ends at y = 10, and with
+/// the default `crawl_zone_cost` the run goes around it instead (tests/crawl_zone.rs).
 fn plan(settings: PlannerSettings) -> Trajectory {
     let p = Planner::new(
         tunnel_scene(),
         "run from the tree to the car",
         [3.5, 26.0],
-        settings,
+        PlannerSettings {
+            crawl_zone_cost: 0.0,
+            ..settings
+        },
     )
     .unwrap();
     p.route()[0].clone()
