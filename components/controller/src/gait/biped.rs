@@ -30,7 +30,7 @@
 //!   height and tilt; it is part of the action and reported by the metrics.
 
 use super::ik::{LegGeometry, leg_ik};
-use super::map_plane::{MapPlane, map_coord};
+use super::map_plane::MapPlane;
 use super::params::GaitParams;
 
 use plamo_interfaces::CONTROL_DT;
@@ -301,15 +301,7 @@ impl<'a> Ground<'a> {
     /// Share of rough ground under the body, 0-1: the height map's largest distance from
     /// its least-squares plane, from [`ROUGH_STEP`] (0) to twice it (1).
     fn rough_share(&self) -> f64 {
-        let plane = MapPlane::fit(self.map);
-        let mut worst: f64 = 0.0;
-        for r in 0..LOCAL_MAP_SIDE {
-            for c in 0..LOCAL_MAP_SIDE {
-                let h = self.map[r * LOCAL_MAP_SIDE + c];
-                worst = worst.max((h - plane.at(map_coord(r), map_coord(c))).abs());
-            }
-        }
-        (worst / ROUGH_STEP - 1.0).clamp(0.0, 1.0)
+        (MapPlane::roughness(self.map) / ROUGH_STEP - 1.0).clamp(0.0, 1.0)
     }
 
     /// Highest ground a sole sweeps from ankle point `a` to `b` above the plane of
@@ -613,6 +605,7 @@ impl BipedGait {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gait::map_plane::map_coord;
 
     #[test]
     fn joints_resolve() {

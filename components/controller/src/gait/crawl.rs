@@ -40,7 +40,7 @@ use plamo_physics::NUM_JOINTS;
 use plamo_physics::humanoid::{BODIES, JOINTS, body_index, joint_index};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
-use super::map_plane::{MapPlane, map_coord};
+use super::map_plane::MapPlane;
 use super::params::{parse_toml, read_params};
 use super::{residual_force, residual_wrench};
 use crate::error::{ControllerError, Result};
@@ -764,20 +764,6 @@ impl CrawlGait {
         ]
     }
 
-    /// Largest distance of a height map sample from the map's least-squares plane
-    /// \[m\]: a step or bump, not a slope.
-    fn roughness(obs: &Observation) -> f64 {
-        let plane = MapPlane::fit(&obs.height_map);
-        let mut worst: f64 = 0.0;
-        for r in 0..LOCAL_MAP_SIDE {
-            for c in 0..LOCAL_MAP_SIDE {
-                let h = obs.height_map[r * LOCAL_MAP_SIDE + c];
-                worst = worst.max((h - plane.at(map_coord(r), map_coord(c))).abs());
-            }
-        }
-        worst
-    }
-
     /// Joint targets with the contacts at `contacts` (heading frame, relative to the
     /// desired pelvis; z absolute relative to the ground under the root).
     fn pose_targets(
@@ -893,7 +879,7 @@ impl CrawlGait {
         // What the plan asks for.
         let wp0 = obs.waypoints[0];
         let wp1 = obs.waypoints[1];
-        let share = (Self::roughness(obs) / p.rough_step - 1.0).clamp(0.0, 1.0);
+        let share = (MapPlane::roughness(&obs.height_map) / p.rough_step - 1.0).clamp(0.0, 1.0);
         self.rough += (CONTROL_DT / p.rough_filter).min(1.0) * (share - self.rough);
         let top = p.max_speed + self.rough * (p.rough_speed.min(p.max_speed) - p.max_speed);
         let vmax = (1.15 * obs.waypoint_speeds[0].max(0.0) + 0.2).min(top);
@@ -1121,6 +1107,7 @@ impl CrawlGait {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gait::map_plane::map_coord;
 
     #[test]
     fn built_in_parameters_validate_and_bad_ones_name_the_field() {

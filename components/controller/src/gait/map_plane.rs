@@ -52,6 +52,21 @@ impl MapPlane {
     pub(crate) fn at(&self, x: f64, y: f64) -> f64 {
         self.mean + self.forward * x + self.lateral * y
     }
+
+    /// Largest distance of a sample of `map` from its least-squares plane \[m\]: a
+    /// step or a bump, not a slope (stepped ground and gravel for the crawl's
+    /// slowdown and the biped's longer steps).
+    pub(crate) fn roughness(map: &[f64]) -> f64 {
+        let plane = Self::fit(map);
+        let mut worst: f64 = 0.0;
+        for r in 0..LOCAL_MAP_SIDE {
+            for c in 0..LOCAL_MAP_SIDE {
+                let h = map[r * LOCAL_MAP_SIDE + c];
+                worst = worst.max((h - plane.at(map_coord(r), map_coord(c))).abs());
+            }
+        }
+        worst
+    }
 }
 
 #[cfg(test)]
