@@ -55,9 +55,9 @@ pub struct PlanGrid {
     /// `PlannerSettings::crawl_relief_cost` \[1/m\].
     pub relief_cost: f64,
     /// Extra cost per metre of path \[1\] where a top makes a leg lower its head
-    /// below its form's (`PlannerSettings::crawl_zone_cost`, `stoop_zone_cost`), by
-    /// [`Posture`](crate::Posture): index 0 a crouch-walk leg, 1 a standing one. Empty when both
-    /// costs are off.
+    /// below its form's (`PlannerSettings::crawl_zone_cost`, `stoop_zone_cost`),
+    /// by [`Posture`](crate::Posture): index 0 a crouch-walk leg, 1 a standing
+    /// one. Empty when both costs are off.
     pub head_cost: [Vec<f32>; 2],
     /// Whether any cell has a `head_cost` (lets searches skip it).
     pub has_head_cost: bool,

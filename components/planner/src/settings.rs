@@ -117,9 +117,9 @@ pub struct PlannerSettings {
     /// paper) \[1\]: each metre of such a leg within `character_radius` of a top
     /// that leaves no room to stand (below `stand_height` + `stoop_margin`), and a
     /// character radius further out, costs this many metres on top of its edge
-    /// cost (`crawl_zone_cost` instead where the top makes it crawl). A crouch under
-    /// a top is two changes of gait on the way, where a walk or run falls more than
-    /// on its feet. 0 disables. Default 1.
+    /// cost (`crawl_zone_cost` instead where the top makes it crawl): a crouch
+    /// under a top puts two changes of gait into a walk or run. 0 disables.
+    /// Default 1.
     pub stoop_zone_cost: f64,
     /// Top speed walking \[m/s\]. Default 2.0.
     pub walk_speed: f64,
