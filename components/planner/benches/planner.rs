@@ -226,6 +226,22 @@ fn bench_full_plan(c: &mut Criterion) {
     g.bench_function("planner_new_incl_grid_and_labels", |b| {
         b.iter(|| black_box(Planner::new(scene.clone(), ROUTE, start, s.clone()).unwrap()))
     });
+    // Baseline: the same without the cost of lowering the head under tops (no
+    // per-cell cost maps, the paper's routes through the tunnel).
+    let no_head_cost = PlannerSettings {
+        crawl_zone_cost: 0.0,
+        stoop_zone_cost: 0.0,
+        ..s.clone()
+    };
+    let mut bare = Planner::new(scene.clone(), ROUTE, start, no_head_cost.clone()).unwrap();
+    g.bench_function("plan_route_grid_built_no_head_cost", |b| {
+        b.iter(|| black_box(bare.plan_route(start).unwrap()))
+    });
+    g.bench_function("planner_new_no_head_cost", |b| {
+        b.iter(|| {
+            black_box(Planner::new(scene.clone(), ROUTE, start, no_head_cost.clone()).unwrap())
+        })
+    });
     g.finish();
 }
 

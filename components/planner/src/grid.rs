@@ -294,15 +294,27 @@ impl PlanGrid {
         // A head limited below the crawl switch means crawling, and the body trails
         // the head by its length.
         let crawl_head = (s.crawl_switch_height + s.head_margin) as f32;
-        // Cells within `radius` of a cell whose headroom is below `below`.
+        // Cells within `radius` of a cell whose headroom is below `below`. The
+        // nearest such cell to a cell outside them has a side neighbour outside them
+        // (a step from any other towards the cell comes closer), so only those cells'
+        // discs are drawn: a top's rim, not its whole area.
         let near_tops = |below: f32, radius: f64| {
+            let low = |i: isize, j: isize| {
+                i < 0 || j < 0 || i >= nx as isize || j >= ny as isize || {
+                    headroom[j as usize * nx + i as usize] < below
+                }
+            };
             let mut near = vec![false; n];
             let rr = (radius / res).ceil() as isize;
             for (c, &hr) in headroom.iter().enumerate() {
                 if hr >= below {
                     continue;
                 }
+                near[c] = true;
                 let (ci, cj) = ((c % nx) as isize, (c / nx) as isize);
+                if low(ci - 1, cj) && low(ci + 1, cj) && low(ci, cj - 1) && low(ci, cj + 1) {
+                    continue;
+                }
                 for dj in -rr..=rr {
                     for di in -rr..=rr {
                         let (i, j) = (ci + di, cj + dj);

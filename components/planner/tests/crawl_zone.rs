@@ -3,7 +3,7 @@
 //! the top, a leg already that low is not affected, and where no way leads around
 //! the route still goes under it.
 
-use plamo_planner::{Planner, PlannerSettings, Trajectory};
+use plamo_planner::{PlanGrid, Planner, PlannerSettings, Trajectory};
 use plamo_scenes::{Footprint, HeightGrid, Landmark, Region, Scene, TopObstacle, Wall};
 
 /// A 24 m x 12 m flat field, landmarks west (3, 6) and east (21, 6), a top over
@@ -130,4 +130,40 @@ fn a_walk_goes_around_a_top_it_would_crouch_under_and_a_crouch_walk_does_not() {
         plan(field(0.9, false), "crouch-walk", 0.0),
         plan(field(0.9, false), "crouch-walk", 2.0)
     );
+}
+
+/// The crawl zone drawn from the tops' rims equals every low cell's disc drawn
+/// (the plain rule), for tops of several sizes, one over the field's edge.
+#[test]
+fn the_crawl_zone_is_every_low_cells_disc() {
+    let mut scene = field(0.6, false);
+    for (k, (c, half)) in [([2.0, 2.0], [2.5, 1.0]), ([18.0, 9.0], [0.3, 2.0])]
+        .into_iter()
+        .enumerate()
+    {
+        scene.tops.push(TopObstacle {
+            name: format!("extra{k}"),
+            footprint: Footprint::axis_aligned(c, half),
+            z_bottom: 0.5,
+            z_top: 0.7,
+        });
+    }
+    let s = PlannerSettings::default();
+    let g = PlanGrid::build(&scene, &s);
+    let low = (s.crawl_switch_height + s.head_margin) as f32;
+    let rr = (s.crawl_body_length / g.resolution).ceil() as isize;
+    let (nx, ny) = (g.nx as isize, g.ny as isize);
+    let mut want = vec![false; g.len()];
+    for (c, _) in g.headroom.iter().enumerate().filter(|(_, h)| **h < low) {
+        let (ci, cj) = (c as isize % nx, c as isize / nx);
+        for j in (cj - rr).max(0)..(cj + rr + 1).min(ny) {
+            for i in (ci - rr).max(0)..(ci + rr + 1).min(nx) {
+                if (i - ci).pow(2) + (j - cj).pow(2) <= rr * rr {
+                    want[(j * nx + i) as usize] = true;
+                }
+            }
+        }
+    }
+    assert!(want.iter().filter(|&&z| z).count() > 1000);
+    assert!(g.crawl_zone == want);
 }
