@@ -32,7 +32,7 @@ mod validate;
 pub use builtin::{builtin, builtin_names, builtin_source};
 pub use errors::SceneError;
 pub use file_format::SceneFile;
-pub use geometry::Footprint;
+pub use geometry::{Footprint, FootprintFrame};
 pub use height_png::{read as read_height_png, write as write_height_png};
 pub use loader::{from_toml_str, load, parse_toml, resolve};
 pub use model::{DynamicObstacle, Landmark, ObstacleShape, Region, Scene, TopObstacle, Wall};

@@ -2,7 +2,7 @@
 //! headroom, and precomputed 8-connected edge costs (all eight of a cell side by side,
 //! so a search reads one cache line per expanded cell).
 
-use plamo_scenes::Scene;
+use plamo_scenes::{FootprintFrame, Scene};
 
 use crate::PlannerSettings;
 
@@ -45,6 +45,8 @@ pub struct PlanGrid {
     /// puts the head below `crawl_switch_height`, or within `crawl_body_length` of
     /// one.
     pub crawl_zone: Vec<bool>,
+    /// The scene's walls with their rotations worked out, for footprint checks.
+    pub wall_frames: Vec<FootprintFrame>,
     /// Whether any cell's `body_fits` is not all set (lets searches skip the check).
     pub has_body_limits: bool,
     /// Relief under a crawling body per cell: highest minus lowest terrain within
@@ -127,8 +129,10 @@ fn edge_cost_with(s: &PlannerSettings, tan_max_slope: f64, dxy: f64, dh: f64) ->
 /// head to `crawl_body_length` behind it. The line ahead makes a path enter a narrow
 /// gap on a straight lead-in a body long, so a crawler that tracks its path to a
 /// few decimetres is lined up with the gap before its head reaches it.
+/// `walls` are the scene's walls' [`FootprintFrame`]s ([`PlanGrid::wall_frames`]).
 pub(crate) fn crawl_body_clear(
     scene: &Scene,
+    walls: &[FootprintFrame],
     s: &PlannerSettings,
     x: f64,
     y: f64,
@@ -149,10 +153,7 @@ pub(crate) fn crawl_body_clear(
         // The terrain's edge is a drop: a body over it falls off the world.
         (lo[0]..=hi[0]).contains(&px)
             && (lo[1]..=hi[1]).contains(&py)
-            && scene
-                .walls
-                .iter()
-                .all(|wall| wall.footprint.signed_distance(px, py) >= w)
+            && walls.iter().all(|wall| wall.signed_distance(px, py) >= w)
     })
 }
 
@@ -251,12 +252,14 @@ impl PlanGrid {
                 }
             }
         }
+        let wall_frames: Vec<FootprintFrame> =
+            scene.walls.iter().map(|w| w.footprint.frame()).collect();
         let mut body_fits = vec![u8::MAX; n];
         let reach = s.crawl_body_length + 2.0 * s.crawl_half_width;
         let body_bits = |x: f64, y: f64| {
             let mut bits = 0u8;
             for (d, &(di, dj)) in DIRS.iter().enumerate() {
-                if crawl_body_clear(scene, s, x, y, (dj as f64).atan2(di as f64)) {
+                if crawl_body_clear(scene, &wall_frames, s, x, y, (dj as f64).atan2(di as f64)) {
                     bits |= 1 << d;
                 }
             }
@@ -447,6 +450,7 @@ impl PlanGrid {
             height,
             has_tops,
             body_fits,
+            wall_frames,
             crawl_zone,
             has_body_limits,
             relief,

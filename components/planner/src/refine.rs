@@ -79,7 +79,7 @@ impl RefineCtx<'_> {
             CrawlBody::Zone => g.cell_of(x, y).is_some_and(|c| g.crawl_zone[c]),
             CrawlBody::Everywhere => true,
         };
-        !applies || crawl_body_clear(self.scene, self.settings, x, y, heading)
+        !applies || crawl_body_clear(self.scene, &g.wall_frames, self.settings, x, y, heading)
     }
 
     /// Whether the terrain at (x, y), heading `heading` \[rad\], is no steeper than
