@@ -104,14 +104,14 @@ impl RefineCtx<'_> {
         !too_steep(tan_max_slope, line(-m, 0), step) && !too_steep(tan_max_slope, line(0, m), step)
     }
 
-    /// Extra cost per metre of crawling over uneven ground at (x, y) (see
+    /// Extra cost per metre of crawling over uneven ground in cell `c` (see
     /// [`PlannerSettings::crawl_relief_cost`]), 0 where the character walks.
-    fn relief_at(&self, x: f64, y: f64) -> f64 {
+    fn relief_at(&self, c: Option<usize>) -> f64 {
         let g = self.grid;
         if !g.has_relief {
             return 0.0;
         }
-        let Some(c) = g.cell_of(x, y) else {
+        let Some(c) = c else {
             return 0.0;
         };
         let applies = match self.limits.crawl_body {
@@ -147,9 +147,10 @@ impl RefineCtx<'_> {
             }
             let h = self.scene.height_at(x, y);
             cost += edge_cost(self.settings, dxy.max(1e-9), h - h_prev)?;
-            cost += dxy * self.relief_at(x, y);
+            let cell = self.grid.cell_of(x, y);
+            cost += dxy * self.relief_at(cell);
             if self.grid.has_head_cost
-                && let Some(c) = self.grid.cell_of(x, y)
+                && let Some(c) = cell
             {
                 cost += dxy * self.limits.posture.head_cost(self.grid, c);
             }

@@ -301,7 +301,7 @@ impl<'a> Ground<'a> {
     /// Share of rough ground under the body, 0-1: the height map's largest distance from
     /// its least-squares plane, from [`ROUGH_STEP`] (0) to twice it (1).
     fn rough_share(&self) -> f64 {
-        (MapPlane::roughness(self.map) / ROUGH_STEP - 1.0).clamp(0.0, 1.0)
+        MapPlane::rough_share(self.map, ROUGH_STEP)
     }
 
     /// Highest ground a sole sweeps from ankle point `a` to `b` above the plane of

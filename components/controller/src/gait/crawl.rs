@@ -246,32 +246,17 @@ fn never() -> f64 {
 /// of `p`, at a body roll of `roll` \[rad\]. The result's norm never exceeds `cap`:
 /// the blend of two vectors inside the cap's ball stays inside it.
 fn share_torque(p: &CrawlParams, cap: f64, roll: f64, torque: [f64; 3]) -> [f64; 3] {
-    // Gives `first` the budget, then `second` what it leaves, the rest to `third`
-    // (components by index; `second` may be two components sharing as one).
-    fn clamp_to(v: &mut [f64], budget: f64) -> f64 {
-        let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if n > budget {
-            v.iter_mut().for_each(|x| *x *= budget / n);
-        }
-        (budget * budget - v.iter().map(|x| x * x).sum::<f64>())
-            .max(0.0)
-            .sqrt()
-    }
     if !p.roll_first && !p.yaw_last {
         // `residual_wrench` caps the norm, as before these switches.
         return torque;
     }
-    let base = if p.yaw_last {
-        let mut rp = [torque[0], torque[1]];
-        let rest = clamp_to(&mut rp, cap);
-        let mut y = [torque[2]];
-        clamp_to(&mut y, rest);
-        [rp[0], rp[1], y[0]]
+    // Roll (0), pitch (1), yaw (2) in groups by priority.
+    let base: &[&[usize]] = if p.yaw_last {
+        &[&[0, 1], &[2]]
     } else {
-        let mut t = torque;
-        clamp_to(&mut t, cap);
-        t
+        &[&[0, 1, 2]]
     };
+    let base = by_priority(torque, base, cap);
     if !p.roll_first {
         return base;
     }
@@ -283,20 +268,30 @@ fn share_torque(p: &CrawlParams, cap: f64, roll: f64, torque: [f64; 3]) -> [f64;
     if w == 0.0 {
         return base;
     }
-    let mut r = [torque[0]];
-    let rest = clamp_to(&mut r, cap);
-    let first = if p.yaw_last {
-        let mut pi = [torque[1]];
-        let rest = clamp_to(&mut pi, rest);
-        let mut y = [torque[2]];
-        clamp_to(&mut y, rest);
-        [r[0], pi[0], y[0]]
+    let first: &[&[usize]] = if p.yaw_last {
+        &[&[0], &[1], &[2]]
     } else {
-        let mut py = [torque[1], torque[2]];
-        clamp_to(&mut py, rest);
-        [r[0], py[0], py[1]]
+        &[&[0], &[1, 2]]
     };
+    let first = by_priority(torque, first, cap);
     [0, 1, 2].map(|i| base[i] + w * (first[i] - base[i]))
+}
+
+/// `torque` with each group of its components (in order) scaled down to the norm
+/// budget the groups before it leave of `cap` \[N m\].
+fn by_priority(torque: [f64; 3], groups: &[&[usize]], cap: f64) -> [f64; 3] {
+    let mut out = torque;
+    let mut budget = cap;
+    for group in groups {
+        let norm = group.iter().map(|&i| out[i] * out[i]).sum::<f64>().sqrt();
+        if norm > budget {
+            group.iter().for_each(|&i| out[i] *= budget / norm);
+        }
+        budget = (budget * budget - group.iter().map(|&i| out[i] * out[i]).sum::<f64>())
+            .max(0.0)
+            .sqrt();
+    }
+    out
 }
 
 impl Default for CrawlParams {
@@ -879,7 +874,7 @@ impl CrawlGait {
         // What the plan asks for.
         let wp0 = obs.waypoints[0];
         let wp1 = obs.waypoints[1];
-        let share = (MapPlane::roughness(&obs.height_map) / p.rough_step - 1.0).clamp(0.0, 1.0);
+        let share = MapPlane::rough_share(&obs.height_map, p.rough_step);
         self.rough += (CONTROL_DT / p.rough_filter).min(1.0) * (share - self.rough);
         let top = p.max_speed + self.rough * (p.rough_speed.min(p.max_speed) - p.max_speed);
         let vmax = (1.15 * obs.waypoint_speeds[0].max(0.0) + 0.2).min(top);

@@ -67,6 +67,12 @@ impl MapPlane {
         }
         worst
     }
+
+    /// Share of rough ground under `map`, 0-1: its [`roughness`](Self::roughness)
+    /// from `step` \[m\] (0) to twice it (1).
+    pub(crate) fn rough_share(map: &[f64], step: f64) -> f64 {
+        (Self::roughness(map) / step - 1.0).clamp(0.0, 1.0)
+    }
 }
 
 #[cfg(test)]
