@@ -191,15 +191,35 @@ impl RunSpec {
         Ok(Placement { x, y, yaw })
     }
 
+    /// The planner settings: the spec's planner file, or the defaults.
+    pub fn planner_settings(&self) -> Result<PlannerSettings, RunError> {
+        match &self.params.planner {
+            Some(f) => load_planner_settings(f).map_err(RunError::Setup),
+            None => Ok(PlannerSettings::default()),
+        }
+    }
+
     /// Agent `k`'s planner.
     pub fn planner(&self, scene: &Scene, k: usize) -> Result<PlannerComponent, RunError> {
+        self.planner_in(scene, scene, k)
+    }
+
+    /// Agent `k`'s planner, placed in `scene` and planning in `plan_scene` (the scene
+    /// with more obstacles, e.g. a host's).
+    pub fn planner_in(
+        &self,
+        scene: &Scene,
+        plan_scene: &Scene,
+        k: usize,
+    ) -> Result<PlannerComponent, RunError> {
         let p = self.placement(scene, k)?;
-        let settings = match &self.params.planner {
-            Some(f) => load_planner_settings(f).map_err(RunError::Setup)?,
-            None => PlannerSettings::default(),
-        };
-        let planner = Planner::new(scene.clone(), &self.instructions[k], [p.x, p.y], settings)
-            .map_err(|e| RunError::Setup(format!("agent {k}: {e}")))?;
+        let planner = Planner::new(
+            plan_scene.clone(),
+            &self.instructions[k],
+            [p.x, p.y],
+            self.planner_settings()?,
+        )
+        .map_err(|e| RunError::Setup(format!("agent {k}: {e}")))?;
         Ok(PlannerComponent::new(planner, k as u32))
     }
 

@@ -64,17 +64,9 @@ pub fn in_process_with_external(
     let mut planners: Vec<Box<dyn Link<_, _>>> = Vec::new();
     let mut controllers: Vec<Box<dyn Link<_, _>>> = Vec::new();
     for k in 0..spec.agents() {
-        let start = spec.placement(scene, k)?;
-        let planner = plamo_planner::Planner::new(
-            with_slots.clone(),
-            &spec.instructions[k],
-            [start.x, start.y],
-            plamo_planner::PlannerSettings::default(),
-        )
-        .map_err(|e| RunError::Setup(format!("agent {k}: {e}")))?;
         planners.push(Box::new(InProcess::new(
             format!("planner-{k}"),
-            plamo_planner::PlannerComponent::new(planner, k as u32),
+            spec.planner_in(scene, &with_slots, k)?,
         )));
         controllers.push(Box::new(InProcess::new(
             format!("controller-{k}"),
