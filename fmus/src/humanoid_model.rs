@@ -23,7 +23,7 @@ use plamo_planner::FLAG_FINISHED;
 use plamo_scenes::ObstacleShape;
 
 use crate::instance::{Model, ModelContext, Value};
-use crate::planner_model::resolve_scene;
+use crate::resources::{ParamFile, param_files, resolve_scene, text};
 use crate::spec::{ModelSpec, VarType, Variable};
 
 /// GUID of the humanoid FMU.
@@ -34,6 +34,9 @@ pub const EXTERNAL_OBSTACLES: usize = 4;
 
 /// Simulated-time limit of the lockstep \[s\]: the host's stop time decides.
 const MAX_SECONDS: f64 = 1.0e6;
+
+/// The parameter files the whole humanoid takes.
+const PARAM_FILES: [ParamFile; 3] = [ParamFile::Planner, ParamFile::Gait, ParamFile::Crawl];
 
 const OBSTACLE_FIELDS: [(&str, &str, &str); 6] = [
     ("x", "m", "centre x"),
@@ -78,6 +81,7 @@ pub fn spec() -> ModelSpec {
             "radius of the host-driven obstacles, spheres for the planner and physics [m]",
         ),
     ];
+    v.extend(PARAM_FILES.map(ParamFile::variable));
     for k in 1..=EXTERNAL_OBSTACLES {
         v.push(Variable::input(
             format!("obstacle[{k}].active"),
@@ -165,13 +169,6 @@ pub fn spec() -> ModelSpec {
     }
 }
 
-fn text(values: &[Value], spec: &ModelSpec, name: &str) -> String {
-    match spec.vr(name).map(|vr| &values[vr as usize]) {
-        Some(Value::String(s)) => s.to_string_lossy().into_owned(),
-        _ => String::new(),
-    }
-}
-
 /// The `physics` parameter as a backend of this build.
 pub fn backend(name: &str) -> Result<BackendKind, String> {
     let allowed: Vec<&str> = BackendKind::ALL
@@ -238,7 +235,7 @@ pub fn build(
         instructions: vec![text(values, spec, "instructions")],
         backend: kind,
         seed,
-        params: Default::default(),
+        params: param_files(&PARAM_FILES, values, spec, ctx)?,
     };
     let shapes = [ObstacleShape::Sphere { radius }; EXTERNAL_OBSTACLES];
     let links = in_process_with_external(&run, &scene, &shapes).map_err(|e| e.to_string())?;

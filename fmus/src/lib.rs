@@ -18,13 +18,15 @@ pub mod humanoid_model;
 pub mod instance;
 pub mod models;
 mod planner_model;
+pub mod resources;
 pub mod spec;
 
 use std::ffi::{CString, c_char};
 use std::sync::OnceLock;
 
 pub use humanoid_model::GUID as HUMANOID_GUID;
-pub use planner_model::{GUID as PLANNER_GUID, resolve_scene};
+pub use planner_model::GUID as PLANNER_GUID;
+pub use resources::resolve_scene;
 
 /// The model description of the FMU at `index` (0 = planner, 1 = humanoid), or null past the end.
 /// Not part of FMI: the packager calls it to write `modelDescription.xml`. The text

@@ -2,10 +2,10 @@
 //! Inputs are the character's head position; outputs are the next waypoints and the
 //! planned speed, updated at the control rate (30 Hz) whatever the host's step.
 
-use plamo_planner::{PlanStatus, Planner, PlannerInput, PlannerSettings};
-use plamo_scenes::Scene;
+use plamo_planner::{PlanStatus, Planner, PlannerInput};
 
 use crate::instance::{Model, ModelContext, Value};
+use crate::resources::{ParamFile, param_files, planner_settings, resolve_scene, text};
 use crate::spec::{ModelSpec, VarType, Variable};
 
 /// Waypoints exposed (paper 4.2: 10 samples, 0.5 s apart).
@@ -36,8 +36,9 @@ pub fn spec() -> ModelSpec {
             "terrain_preference",
             VarType::Real,
             "1.0",
-            "slope preference c of the A* cost e^(c*slope)-1 (0 = shortest path)",
+            "slope preference c of the A* cost e^(c*slope)-1 (0 = shortest path); it overrides `slope_preference_c` of a planner parameter file",
         ),
+        ParamFile::Planner.variable(),
         Variable::real_input(
             "character.x",
             0.0,
@@ -125,25 +126,6 @@ pub fn spec() -> ModelSpec {
     }
 }
 
-/// Resolve the `scene` parameter: a file in the FMU's resources, a built-in name, or
-/// a path.
-pub fn resolve_scene(name: &str, ctx: &ModelContext) -> Result<Scene, String> {
-    if let Some(dir) = &ctx.resources {
-        let candidate = dir.join(name);
-        if candidate.is_file() {
-            return plamo_scenes::load(&candidate).map_err(|e| format!("parameter `scene`: {e}"));
-        }
-    }
-    plamo_scenes::resolve(name).map_err(|e| format!("parameter `scene`: {e}"))
-}
-
-fn text(values: &[Value], spec: &ModelSpec, name: &str) -> String {
-    match spec.vr(name).map(|vr| &values[vr as usize]) {
-        Some(Value::String(s)) => s.to_string_lossy().into_owned(),
-        _ => String::new(),
-    }
-}
-
 fn real(values: &[Value], vr: u32) -> f64 {
     match values[vr as usize] {
         Value::Real(x) => x,
@@ -170,9 +152,10 @@ pub fn build(
             .ok_or_else(|| format!("internal: no variable {n}"))
     };
     let scene = resolve_scene(&text(values, spec, "scene"), ctx)?;
-    let settings = PlannerSettings {
+    let files = param_files(&[ParamFile::Planner], values, spec, ctx)?;
+    let settings = plamo_planner::PlannerSettings {
         slope_preference_c: real(values, vr("terrain_preference")?),
-        ..Default::default()
+        ..planner_settings(&files)?
     };
     let input_vr = [vr("character.x")?, vr("character.y")?, vr("character.z")?];
     let start = [real(values, input_vr[0]), real(values, input_vr[1])];

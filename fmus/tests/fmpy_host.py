@@ -298,12 +298,62 @@ def check_simulate_with_input_file():
     assert result["speed"].max() > 0.5, result["speed"].max()
 
 
+def check_humanoid_parameter_files_from_resources():
+    """A planner parameter file shipped in resources/ and named by `planner_params`
+    slows the walk; one with a typo fails initialisation naming the parameter and
+    the field."""
+    tmp = tempfile.mkdtemp()
+    try:
+        slow, typo = f"{tmp}/slow.toml", f"{tmp}/typo.toml"
+        with open(slow, "w") as f:
+            f.write("walk_speed = 0.6\n")
+        with open(typo, "w") as f:
+            f.write("walk_sped = 1.2\n")
+        fmu = with_resource(HUMANOID, "slow.toml", slow)
+
+        def travelled(files):
+            slave, vr, unzipdir = open_slave(fmu)
+            try:
+                slave.setupExperiment(startTime=0.0)
+                slave.enterInitializationMode()
+                if files:
+                    slave.setString([vr["planner_params"]], [files])
+                slave.exitInitializationMode()
+                t, dt, path = 0.0, 0.1, []
+                while t < 4.0 - 1e-9:
+                    slave.doStep(currentCommunicationPoint=t, communicationStepSize=dt)
+                    t += dt
+                    path.append(slave.getReal([vr["head.x"], vr["head.y"]]))
+                slave.terminate()
+                return sum(math.dist(a, b) for a, b in zip(path, path[1:]))
+            finally:
+                slave.freeInstance()
+                shutil.rmtree(unzipdir, ignore_errors=True)
+
+        built_in, with_file = travelled(""), travelled("slow.toml")
+        assert with_file < 0.85 * built_in, (with_file, built_in)
+        print(f"       head travelled {with_file:.2f} m in 4 s with walk_speed = 0.6, {built_in:.2f} m built in")
+        slave, vr, unzipdir = open_slave(HUMANOID)
+        try:
+            slave.setupExperiment(startTime=0.0)
+            slave.enterInitializationMode()
+            slave.setString([vr["planner_params"]], [typo])
+            expect_error("planner file with a typo", slave.exitInitializationMode, "walk_sped")
+            assert any("planner_params" in m for m in LOGS), LOGS
+        finally:
+            slave.freeInstance()
+            shutil.rmtree(unzipdir, ignore_errors=True)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
 CHECKS = [check_validate, check_closed_loop_with_string_parameters, check_misuse_is_refused_with_a_message,
           check_unknown_landmark, check_simulate_with_input_file, check_humanoid_validate,
           check_humanoid_simulate_with_a_ball_rolling_across_its_route,
           check_humanoid_string_parameters_and_a_scene_from_resources,
           check_humanoid_physics_mujoco_runs_or_is_refused,
-          check_humanoid_misuse_is_refused_with_a_message]
+          check_humanoid_misuse_is_refused_with_a_message,
+          check_humanoid_parameter_files_from_resources]
 
 passed = failed = 0
 for check in CHECKS:

@@ -10,7 +10,7 @@ use fmu_runner::{Fmu, FmuInstance, FmuLibrary, fmi2Type};
 use plamo::fmu_package::{find_library, package_all};
 use plamo::lockstep::Lockstep;
 use plamo::lockstep::external::{PARKED_SAMPLE, in_process_with_external};
-use plamo::spec::RunSpec;
+use plamo::spec::{ParamFiles, RunSpec};
 use plamo_controller::ControllerSettings;
 use plamo_interfaces::ObstacleSample;
 use plamo_physics::BackendKind;
@@ -93,12 +93,17 @@ pub fn start_instance(fmu: &FmuLibrary, seed: i32) -> FmuInstance<&FmuLibrary> {
 /// The same route in the in-process lockstep with the FMU's four host-obstacle slots
 /// (radius 0.3 m, the FMU's default), and its instruction count.
 pub fn route_lockstep(seed: u64) -> (Lockstep, usize) {
+    route_lockstep_with(seed, ParamFiles::default())
+}
+
+/// [`route_lockstep`] with parameter files.
+pub fn route_lockstep_with(seed: u64, params: ParamFiles) -> (Lockstep, usize) {
     let spec = RunSpec {
         scene: "playground".into(),
         instructions: vec![INSTRUCTIONS.into()],
         backend: BackendKind::Rapier,
         seed,
-        params: Default::default(),
+        params,
     };
     let scene = spec.load_scene().expect("playground");
     let count = plamo_planner::parse_instructions(INSTRUCTIONS, &scene)
