@@ -45,7 +45,7 @@ use super::params::{parse_toml, read_params};
 use super::{residual_force, residual_wrench};
 use crate::error::{ControllerError, Result};
 use crate::math::{sub3, wrap_angle};
-use crate::observation::{Observation, WAYPOINT_SPACING};
+use crate::observation::{NUM_WAYPOINTS, Observation, WAYPOINT_SPACING};
 use crate::policy::{Action, RootWrench};
 use crate::settings::{ControllerSettings, GRAVITY};
 
@@ -224,6 +224,23 @@ pub struct CrawlParams {
     /// +-2 rad/s) alone asks for more than the cap.
     #[serde(default)]
     pub yaw_last: bool,
+    /// Ground beyond the local height map's front edge from the plan: the hands land
+    /// ~0.52 m ahead of the pelvis and the map ends 0.35 m ahead, so without this a
+    /// hand's target and the body height (the mean ground under the four contacts)
+    /// take the map's front row; with it, the ground between the map's edge and the
+    /// plan's waypoints ahead (`Observation::waypoint_ground`) is interpolated
+    /// linearly, as the biped's feet see it (off: the front row, as before).
+    #[serde(default)]
+    pub ground_ahead: bool,
+    /// Share of the ground's rise, from the knees' nominal contacts to the hands', that
+    /// the body pitches up with \[-\] (the slope angle low-passed over
+    /// `SLOPE_FILTER`): up stairs and slopes the trunk pitches up and the head keeps
+    /// its height above the ground ahead. Downhill the body keeps `pelvis_pitch`:
+    /// pitching down with the ground put the head onto the fall rule's bar on the
+    /// random tours' slopes (MuJoCo, RESULTS "Crawl", session 11). 0: `pelvis_pitch`
+    /// on any ground, as before.
+    #[serde(default)]
+    pub slope_pitch: f64,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -329,7 +346,8 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 58] = [
+        let ranges: [(&'static str, f64, f64, f64); 59] = [
+            ("slope_pitch", self.slope_pitch, 0.0, 1.5),
             ("roll_first_from", self.roll_first_from, 0.0, 1.5),
             ("rough_step", self.rough_step, 0.005, 4.0),
             ("rough_speed", self.rough_speed, 0.0, 5.0),
@@ -554,6 +572,74 @@ fn limb_ik(l1: f64, l2: f64, bend: f64, up: bool, p: [f64; 3]) -> [f64; 3] {
     [qx, phi - bend * beta, bend * bend_angle]
 }
 
+/// Forward distance of the local height map's front row from the root \[m\].
+const MAP_FRONT: f64 = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0 * LOCAL_MAP_SPACING;
+
+/// Terrain under the crawl's contacts, relative to the ground under the root (see
+/// `ground_ahead`).
+struct Ground<'a> {
+    map: &'a [f64],
+    /// Forward distance and ground height of the plan's waypoints ahead of the map,
+    /// in increasing distance \[m\] (none without `ground_ahead`).
+    ahead: [(f64, f64); NUM_WAYPOINTS],
+    n_ahead: usize,
+}
+
+impl<'a> Ground<'a> {
+    /// The height map of `obs`, and with `ahead` the waypoints that lie ahead of its
+    /// front row, each at least 5 cm further than the one before (a plan turning
+    /// back or standing still adds nothing) and within 45 degrees of straight ahead
+    /// (a plan off to the side has its ground elsewhere than under the hands).
+    fn new(obs: &'a Observation, ahead: bool) -> Self {
+        let mut g = Ground {
+            map: &obs.height_map,
+            ahead: [(0.0, 0.0); NUM_WAYPOINTS],
+            n_ahead: 0,
+        };
+        if !ahead {
+            return g;
+        }
+        let mut last = MAP_FRONT;
+        for (w, &h) in obs.waypoints.iter().zip(&obs.waypoint_ground) {
+            // Waypoints are relative to the head; the map to the root.
+            let x = w[0] + obs.head_pos[0];
+            let y = w[1] + obs.head_pos[1];
+            if x > last + 0.05 && y.abs() <= x {
+                g.ahead[g.n_ahead] = (x, h);
+                g.n_ahead += 1;
+                last = x;
+            }
+        }
+        g
+    }
+
+    /// Height at a heading-frame point (x forward, y left of the root) \[m\]:
+    /// bilinear in the map, clamped to its extent; ahead of its front row
+    /// interpolated to the waypoints' ground, beyond the last the last one's.
+    fn at(&self, x: f64, y: f64) -> f64 {
+        let half = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
+        let last = (LOCAL_MAP_SIDE - 1) as f64;
+        let r = (x / LOCAL_MAP_SPACING + half).clamp(0.0, last);
+        let c = (y / LOCAL_MAP_SPACING + half).clamp(0.0, last);
+        let (r0, c0) = (r.floor().min(last - 1.0), c.floor().min(last - 1.0));
+        let (fr, fc) = (r - r0, c - c0);
+        let h = |i: f64, j: f64| self.map[i as usize * LOCAL_MAP_SIDE + j as usize];
+        let edge = (1.0 - fr) * ((1.0 - fc) * h(r0, c0) + fc * h(r0, c0 + 1.0))
+            + fr * ((1.0 - fc) * h(r0 + 1.0, c0) + fc * h(r0 + 1.0, c0 + 1.0));
+        if x <= MAP_FRONT || self.n_ahead == 0 {
+            return edge;
+        }
+        let mut prev = (MAP_FRONT, edge);
+        for &(xw, hw) in &self.ahead[..self.n_ahead] {
+            if x <= xw {
+                return prev.1 + (hw - prev.1) * (x - prev.0) / (xw - prev.0);
+            }
+            prev = (xw, hw);
+        }
+        prev.1
+    }
+}
+
 /// What the crawl is doing.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Mode {
@@ -606,8 +692,16 @@ pub(crate) struct CrawlGait {
     aligning: bool,
     /// Low-passed share of rough ground under the body, 0-1 (see `rough_step`).
     rough: f64,
+    /// Low-passed rise of the ground under the contacts \[rad\], 0 downhill (see
+    /// `slope_pitch`; stays 0 without it).
+    slope: f64,
     last_wrench: RootWrench,
 }
+
+/// Time constant of the low-pass on the ground's slope under the body (see
+/// `slope_pitch`) \[s\]: a hand crossing a stair's nose changes the slope between
+/// knees and hands at once; the trunk follows over a stride.
+const SLOPE_FILTER: f64 = 0.3;
 
 /// Heading error below which a crawl that has just got down faces its plan \[rad\].
 const ALIGNED: f64 = 0.3;
@@ -638,6 +732,7 @@ impl CrawlGait {
             v_slip: [0.0; 2],
             aligning: false,
             rough: 0.0,
+            slope: 0.0,
             last_wrench: RootWrench::default(),
         }
     }
@@ -695,25 +790,29 @@ impl CrawlGait {
         (-obs.root_rotation[2]).clamp(-1.0, 1.0).asin()
     }
 
-    /// Terrain height (relative to the ground under the root) at a heading-frame
-    /// point, bilinear in the local height map.
-    fn ground_at(obs: &Observation, x: f64, y: f64) -> f64 {
-        let half = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
-        let last = (LOCAL_MAP_SIDE - 1) as f64;
-        let r = (x / LOCAL_MAP_SPACING + half).clamp(0.0, last);
-        let c = (y / LOCAL_MAP_SPACING + half).clamp(0.0, last);
-        let (r0, c0) = (r.floor().min(last - 1.0), c.floor().min(last - 1.0));
-        let (fr, fc) = (r - r0, c - c0);
-        let h = |i: f64, j: f64| obs.height_map[i as usize * LOCAL_MAP_SIDE + j as usize];
-        (1.0 - fr) * ((1.0 - fc) * h(r0, c0) + fc * h(r0, c0 + 1.0))
-            + fr * ((1.0 - fc) * h(r0 + 1.0, c0) + fc * h(r0 + 1.0, c0 + 1.0))
+    /// The desired body frame: `pelvis_pitch`, less the share `slope_pitch` of the
+    /// ground's rise.
+    fn frame(&self, ground: &Ground) -> Frame {
+        let p = &self.params;
+        self.frame_at(ground, p.pelvis_pitch - p.slope_pitch * self.slope)
     }
 
-    /// The desired body frame for a pelvis pitch.
-    fn frame(&self, obs: &Observation) -> Frame {
+    /// Forward slope angle of the ground from the knees' nominal contacts to the
+    /// hands' \[rad\], uphill positive, for the body at `pelvis_pitch`.
+    fn ground_slope(&self, ground: &Ground) -> f64 {
+        let n = self.nominal(&self.frame_at(ground, self.params.pelvis_pitch));
+        let mid = |a: [f64; 2], b: [f64; 2]| {
+            let h = 0.5 * (ground.at(a[0], a[1]) + ground.at(b[0], b[1]));
+            (0.5 * (a[0] + b[0]), h)
+        };
+        let (knees, hands) = (mid(n[0], n[1]), mid(n[2], n[3]));
+        (hands.1 - knees.1).atan2(hands.0 - knees.0)
+    }
+
+    /// The desired body frame for a pelvis pitch \[rad\].
+    fn frame_at(&self, ground: &Ground, pelvis_pitch: f64) -> Frame {
         let p = &self.params;
         let g = &self.geo;
-        let pelvis_pitch = p.pelvis_pitch;
         let torso_pitch = pelvis_pitch + p.spine_pitch;
         let hip = g.hip.map(|h| rot_y(pelvis_pitch, h));
         let spine = rot_y(pelvis_pitch, g.spine);
@@ -724,13 +823,13 @@ impl CrawlGait {
                 .max(0.01)
                 .sqrt();
         // Ground under the nominal contacts: on a slope or a step the body follows it.
-        let mut ground = 0.0;
+        let mut under = 0.0;
         for (side, h) in hip.iter().enumerate() {
-            ground += Self::ground_at(obs, h[0] + p.knee_fwd, h[1]);
+            under += ground.at(h[0] + p.knee_fwd, h[1]);
             let s = shoulder[side];
-            ground += Self::ground_at(obs, s[0] + p.hand_fwd, s[1]);
+            under += ground.at(s[0] + p.hand_fwd, s[1]);
         }
-        let pelvis_height = ground / 4.0 + hip_height - hip[0][2];
+        let pelvis_height = under / 4.0 + hip_height - hip[0][2];
         // The nominal hand seen from the torso decides the arm's IK branch.
         let hand = [
             p.hand_fwd,
@@ -848,7 +947,7 @@ impl CrawlGait {
     }
 
     /// Contact heights on the ground (pressed in), for (x, y) points.
-    fn grounded(&self, obs: &Observation, xy: &[[f64; 2]; LIMBS]) -> [[f64; 3]; LIMBS] {
+    fn grounded(&self, ground: &Ground, xy: &[[f64; 2]; LIMBS]) -> [[f64; 3]; LIMBS] {
         let p = &self.params;
         std::array::from_fn(|i| {
             let [x, y] = xy[i];
@@ -857,7 +956,7 @@ impl CrawlGait {
             } else {
                 HAND_RADIUS - p.hand_press
             };
-            [x, y, Self::ground_at(obs, x, y) + rest]
+            [x, y, ground.at(x, y) + rest]
         })
     }
 
@@ -899,7 +998,12 @@ impl CrawlGait {
             v_plan[0] = v_plan[0].max(-p.max_side_speed);
             v_plan[1] = v_plan[1].clamp(-p.max_side_speed, p.max_side_speed);
         }
-        let f = self.frame(obs);
+        let ground = Ground::new(obs, p.ground_ahead);
+        if p.slope_pitch > 0.0 {
+            let a = (CONTROL_DT / SLOPE_FILTER).min(1.0);
+            self.slope += a * (self.ground_slope(&ground).max(0.0) - self.slope);
+        }
+        let f = self.frame(&ground);
         let nominal = self.nominal(&f);
 
         let targets = &mut out.pd_targets;
@@ -915,7 +1019,7 @@ impl CrawlGait {
                 for hand in &mut reach[2..] {
                     hand[0] += p.down_reach * vx.max(0.0);
                 }
-                let contacts = self.grounded(obs, &reach);
+                let contacts = self.grounded(&ground, &reach);
                 self.pose_targets(&f, &contacts, [0.0; 2], &mut crawl);
                 self.through_squat(false, &self.from, &crawl, t / p.down_time, targets);
                 let t = t + CONTROL_DT;
@@ -1030,7 +1134,7 @@ impl CrawlGait {
                     }
                     xy[i] = [nx + self.offset[i][0], ny + self.offset[i][1]];
                 }
-                let mut contacts = self.grounded(obs, &xy);
+                let mut contacts = self.grounded(&ground, &xy);
                 for i in 0..LIMBS {
                     if lift[i] > 0.0 {
                         // Clear the highest ground between lift-off and landing.
@@ -1038,7 +1142,8 @@ impl CrawlGait {
                             nominal[i][0] + self.lift_off[i][0],
                             nominal[i][1] + self.lift_off[i][1],
                         ];
-                        let over = Self::ground_at(obs, x0, y0)
+                        let over = ground
+                            .at(x0, y0)
                             .max(contacts[i][2] - if i < 2 { KNEE_RADIUS } else { HAND_RADIUS });
                         contacts[i][2] = contacts[i][2].max(over) + lift[i];
                     }
@@ -1096,6 +1201,7 @@ impl CrawlGait {
         self.v_slip = [0.0; 2];
         self.aligning = false;
         self.rough = 0.0;
+        self.slope = 0.0;
     }
 }
 
@@ -1264,6 +1370,109 @@ mod tests {
             ..CrawlParams::default()
         };
         assert_eq!(share_torque(&off, cap, 0.1, ask), ask);
+    }
+
+    #[test]
+    fn the_hands_see_the_plans_ground_beyond_the_map() {
+        use crate::observation::ObservationLayout;
+        let layout = ObservationLayout {
+            num_joints: NUM_JOINTS,
+            num_bodies: BODIES.len(),
+        };
+        // Flat under the body (the map), a tread 0.15 m up under the plan ahead: the
+        // crawl's head 0.6 m ahead of the root, its waypoints from 0.85 m on.
+        let mut obs = Observation::new(layout);
+        obs.root_height = 0.5;
+        obs.head_pos = [0.6, 0.0, -0.15];
+        for i in 0..NUM_WAYPOINTS {
+            obs.waypoints[i] = [0.25 * (i + 1) as f64, 0.0, 0.0];
+        }
+        obs.waypoint_ground = [0.15; NUM_WAYPOINTS];
+        let off = CrawlParams {
+            ground_ahead: false,
+            ..CrawlParams::default()
+        };
+        let on = CrawlParams {
+            ground_ahead: true,
+            ..off
+        };
+        let gait = |p: CrawlParams| CrawlGait::new(p, ControllerSettings::default());
+        let (g_off, g_on) = (Ground::new(&obs, false), Ground::new(&obs, true));
+        // Inside the map both read the map; beyond it only the switch sees the tread.
+        assert_eq!(g_on.at(0.2, 0.1), 0.0);
+        assert_eq!(g_off.at(0.52, 0.1), 0.0);
+        let hand = g_on.at(0.52, 0.1);
+        assert!((hand - 0.15 * 0.17 / 0.5).abs() < 1e-9, "{hand}");
+        assert!((g_on.at(3.0, 0.0) - 0.15).abs() < 1e-9);
+        let (f_off, f_on) = (gait(off).frame(&g_off), gait(on).frame(&g_on));
+        assert!(
+            f_on.pelvis_height > f_off.pelvis_height + 0.01,
+            "{} vs {}",
+            f_on.pelvis_height,
+            f_off.pelvis_height
+        );
+        // A plan off to the side has its ground elsewhere: not taken.
+        for w in &mut obs.waypoints {
+            w[1] = 3.0 * (w[0] + 0.6);
+        }
+        assert_eq!(Ground::new(&obs, true).at(0.52, 0.1), 0.0);
+    }
+
+    #[test]
+    fn the_body_pitches_up_stairs_only_with_slope_pitch() {
+        use crate::observation::ObservationLayout;
+        // The body's desired pelvis pitch after 1.5 s at rest over stairs of 0.15 m x
+        // 0.31 m rising (`up`) or falling ahead, the plan's ground beyond the map on
+        // the same stairs.
+        let pitch = |params: CrawlParams, up: bool| {
+            let layout = ObservationLayout {
+                num_joints: NUM_JOINTS,
+                num_bodies: BODIES.len(),
+            };
+            let sign = if up { 1.0 } else { -1.0 };
+            let stairs = |x: f64| sign * 0.15 * (x / 0.31).floor();
+            let mut obs = Observation::new(layout);
+            obs.root_height = 0.5;
+            obs.head_pos = [0.6, 0.0, -0.15];
+            for r in 0..LOCAL_MAP_SIDE {
+                for c in 0..LOCAL_MAP_SIDE {
+                    obs.height_map[r * LOCAL_MAP_SIDE + c] = stairs(map_coord(r));
+                }
+            }
+            for i in 0..NUM_WAYPOINTS {
+                let x = 0.25 * (i + 1) as f64;
+                obs.waypoints[i] = [x, 0.0, 0.0];
+                obs.waypoint_ground[i] = stairs(x + 0.6);
+            }
+            let mut gait = CrawlGait::new(params, ControllerSettings::default());
+            gait.reset();
+            let mut out = Action::default();
+            for _ in 0..(1.5 / CONTROL_DT) as usize {
+                gait.act(&obs, &mut out);
+            }
+            gait.frame(&Ground::new(&obs, params.ground_ahead))
+                .pelvis_pitch
+        };
+        let off = CrawlParams {
+            slope_pitch: 0.0,
+            ground_ahead: true,
+            ..CrawlParams::default()
+        };
+        let on = CrawlParams {
+            slope_pitch: 1.0,
+            ..off
+        };
+        let level = off.pelvis_pitch;
+        assert_eq!(pitch(off, true), level);
+        assert_eq!(pitch(off, false), level);
+        // The stairs' mean slope is 0.45 rad; between knees and hands ~0.5 m apart
+        // the treads under them decide.
+        let up = pitch(on, true);
+        assert!(
+            up < level - 0.2 && up > level - 0.8,
+            "up {up} (level {level})"
+        );
+        assert_eq!(pitch(on, false), level);
     }
 
     #[test]
