@@ -2,15 +2,17 @@
 //! requested head height (crouch-walk <-> walk) and speed (walk <-> run):
 //! - the plan's next waypoint (0.5 s ahead, relative to the head) gives the desired
 //!   velocity (so position errors are corrected; rate-limited to [`MAX_ACCEL`] so a
-//!   start from rest speeds up step by step) and the heading error;
+//!   start from rest speeds up step by step; where the form asks for it, less of its
+//!   sideways part while the heading error is large) and the heading error;
 //! - the form's head height follows the plan at a bounded rate ([`MAX_HEIGHT_RATE`]);
 //! - the swing foot follows a path from its lift-off point to a SIMBICON foot
 //!   placement (ahead of the centre of mass by velocity, velocity error and an
 //!   integral of the speed error, further on rough ground and while the pelvis pitches
-//!   forward where the form asks for it, sideways by the lateral velocity) by two-segment leg
-//!   IK; the path is followed kd/kp ahead (the lag of a PD servo behind a moving
-//!   target) plus the form's `swing_lead` (the leg's inertia adds to it); the swing is
-//!   quicker at higher speed (`step_time_per_speed`);
+//!   forward where the form asks for it, sideways by the lateral velocity, stepping
+//!   out under a body that turns back and moves fast sideways where the form asks for
+//!   it) by two-segment leg IK; the path is followed kd/kp ahead (the lag of a PD
+//!   servo behind a moving target) plus the form's `swing_lead` (the leg's inertia
+//!   adds to it); the swing is quicker at higher speed (`step_time_per_speed`);
 //! - the gait is terrain-aware ([`Ground`]): the ground comes from the local height
 //!   map where it reaches and, ahead of it, from the ground under the plan's waypoints;
 //!   the sole lands on the highest ground under it; the swing clears the highest
@@ -132,6 +134,14 @@ const FOOT_BIAS_MAX: f64 = 0.15;
 /// from which the form's `rough_fwd_gain` starts to act; it acts fully at twice it \[m\].
 /// The crawl's `rough_step` default: gravel and treads are above it, a ramp is not.
 const ROUGH_STEP: f64 = 0.03;
+
+/// Sideways speed from which the form's `side_step_gain` acts \[m/s\]: a body pushed
+/// sideways at a turn-back reaches 1-1.4 m/s.
+const SIDE_STEP_FROM: f64 = 0.3;
+
+/// Heading error over which the turn-back switches (`turn_lat_share`,
+/// `side_step_gain`) fade in from the form's `turn_from` \[rad\].
+const TURN_FADE: f64 = 0.6;
 
 /// Swing-foot clearance above the stance foot's that counts as touchdown \[m\].
 const TOUCHDOWN: f64 = 0.02;
@@ -328,6 +338,32 @@ impl<'a> Ground<'a> {
     }
 }
 
+/// How much of a turn-back a heading error \[rad\] is, 0-1: none below `from` \[rad\]
+/// (paths bend), all of it from `from` + [`TURN_FADE`] (the plan leads off sideways or
+/// backwards), smooth in between.
+fn turn_weight(heading_err: f64, from: f64) -> f64 {
+    let t = ((heading_err.abs() - from) / TURN_FADE).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// The swing foot's sideways target `y` \[m\] (heading frame, from the root) for a body
+/// moving sideways at `vy` \[m/s\], swing leg on side `side` (-1 right, +1 left): beyond
+/// [`SIDE_STEP_FROM`] the foot on the side of travel steps out `gain` \[s\] per m/s more,
+/// the other one lands no further across than the pelvis.
+fn side_step(y: f64, vy: f64, side: f64, gain: f64) -> f64 {
+    let excess = vy.abs() - SIDE_STEP_FROM;
+    if gain <= 0.0 || excess <= 0.0 {
+        return y;
+    }
+    if side == vy.signum() {
+        y + side * gain * excess
+    } else if side * y < 0.0 {
+        0.0
+    } else {
+        y
+    }
+}
+
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
@@ -368,7 +404,7 @@ impl BipedGait {
         for (c, p) in self.v_cmd.iter_mut().zip(v_plan) {
             *c += (p - *c).clamp(-dv_max, dv_max);
         }
-        let v_des = [self.v_cmd[0], self.v_cmd[1], 0.0];
+        let mut v_des = [self.v_cmd[0], self.v_cmd[1], 0.0];
 
         let heading_err = if wp1[0].hypot(wp1[1]) > 0.2 {
             wrap_angle(wp1[1].atan2(wp1[0]))
@@ -388,6 +424,10 @@ impl BipedGait {
         let dh_max = MAX_HEIGHT_RATE * CONTROL_DT;
         self.h_cmd += (head_des - self.h_cmd).clamp(-dh_max, dh_max);
         let form = self.params.blend(self.h_cmd, speed);
+        let turn = turn_weight(heading_err, form.turn_from);
+        if form.turn_lat_share > 0.0 {
+            v_des[1] *= 1.0 - form.turn_lat_share * turn;
+        }
         // Quicker steps as the commanded speed rises (the rate-limited command, so the
         // cadence rises with the speed during a start).
         let step_time = (form.step_time
@@ -447,9 +487,14 @@ impl BipedGait {
             .zip(&obs.body_pos)
             .map(|(m, p)| m * p[0])
             .sum();
-        let final_y = side(swing) * form.foot_width
-            + form.foot_lat_gain * vy
-            + form.foot_err_gain * (vy - v_des[1]);
+        let final_y = side_step(
+            side(swing) * form.foot_width
+                + form.foot_lat_gain * vy
+                + form.foot_err_gain * (vy - v_des[1]),
+            vy,
+            side(swing),
+            form.side_step_gain * turn,
+        );
         // Rough ground takes the form's longer steps back (`rough_fwd_gain`); the map
         // is only scanned where the form asks for it.
         let fwd_gain = if form.rough_fwd_gain > 0.0 {
@@ -669,6 +714,66 @@ mod tests {
         bump.height_map[3 * LOCAL_MAP_SIDE + 4] = 0.04;
         let s = Ground::new(&bump).rough_share();
         assert!(s > 0.0 && s < 1.0, "{s}");
+    }
+
+    #[test]
+    fn side_steps_catch_a_sideways_fall_without_crossing_the_legs() {
+        let (right, left) = (-1.0, 1.0);
+        // Off, or below the threshold: the target as it was.
+        assert_eq!(side_step(0.2, 1.0, left, 0.0), 0.2);
+        assert_eq!(side_step(0.1, 0.25, left, 0.3), 0.1);
+        // Moving left at 1 m/s: the left foot steps 0.3 s x 0.7 m/s further out.
+        assert!((side_step(0.17, 1.0, left, 0.3) - 0.38).abs() < 1e-12);
+        // The right foot, whose target lies left of the pelvis, lands under it.
+        assert_eq!(side_step(0.05, 1.0, right, 0.3), 0.0);
+        assert_eq!(side_step(-0.02, 1.0, right, 0.3), -0.02);
+        // Mirrored: moving right.
+        assert!((side_step(-0.17, -1.0, right, 0.3) + 0.38).abs() < 1e-12);
+        assert_eq!(side_step(-0.05, -1.0, left, 0.3), 0.0);
+    }
+
+    /// The residual's sideways force \[N\] after 1 s of a plan that leads off at right
+    /// angles to the pelvis at 1 m/s, with `turn_lat_share` set to `share` in every form.
+    fn sideways_push(share: f64) -> f64 {
+        let mut params = GaitParams::default();
+        for form in [&mut params.walk, &mut params.run, &mut params.crouch] {
+            form.turn_lat_share = share;
+        }
+        let mut gait = BipedGait::new(params, ControllerSettings::default());
+        let mut obs = stepped(0.0, 0.0, 0.0);
+        obs.root_height = 0.87;
+        for (i, w) in obs.waypoints.iter_mut().enumerate() {
+            *w = [0.0, WAYPOINT_SPACING * (i + 1) as f64, 0.0];
+        }
+        obs.waypoint_speeds = [1.0; crate::observation::NUM_WAYPOINTS];
+        let mut out = Action::default();
+        for _ in 0..(1.0 / CONTROL_DT) as usize {
+            gait.act(&obs, &mut out);
+        }
+        gait.last_wrench().force[1]
+    }
+
+    #[test]
+    fn a_turn_back_is_not_pushed_sideways_where_the_form_says_so() {
+        // Off: the residual pushes the body after the plan (0.25 g cap on 69 kg).
+        let off = sideways_push(0.0);
+        assert!(off > 50.0, "{off}");
+        // On: the plan's sideways velocity is left out and nothing pushes sideways.
+        let on = sideways_push(1.0);
+        assert!(on.abs() < 1.0, "{on}");
+        let half = sideways_push(0.5);
+        assert!(half > on + 10.0 && half < off - 10.0, "{half}");
+    }
+
+    #[test]
+    fn the_turn_weight_leaves_bends_alone_and_takes_turn_backs() {
+        assert_eq!(turn_weight(0.0, 0.6), 0.0);
+        assert_eq!(turn_weight(-0.6, 0.6), 0.0);
+        assert!((turn_weight(0.9, 0.6) - 0.5).abs() < 1e-12);
+        assert_eq!(turn_weight(1.2, 0.6), 1.0);
+        assert_eq!(turn_weight(-3.0, 0.6), 1.0);
+        assert_eq!(turn_weight(1.2, 1.2), 0.0);
+        assert_eq!(turn_weight(-1.8, 1.2), 1.0);
     }
 
     #[test]

@@ -102,6 +102,33 @@ pub struct FormParams {
     /// front. Absent in older files: 0.
     #[serde(default)]
     pub pitch_fwd_gain: f64,
+    /// Extra sideways foot placement per m/s of sideways speed beyond 0.3 m/s while
+    /// the heading error is large (none below `turn_from`, all of it from 0.6 rad
+    /// above it) \[s\]:
+    /// the swing foot on the side the body moves towards steps out under it (a capture
+    /// step: at 1 m/s sideways a 0.7 m pelvis needs its foot ~0.27 m out,
+    /// `foot_lat_gain` alone puts it 0.03-0.2 m), and the other one lands no further
+    /// across than the pelvis (crossed legs collide). Where a leg starts by turning
+    /// back, the plan leads off sideways and the body falls over its side at 1-1.4 m/s.
+    /// (The same step at any heading, measured at 0.3 s: 200 MuJoCo tours 98 -> 93.)
+    /// Absent in older files: 0 (off).
+    #[serde(default)]
+    pub side_step_gain: f64,
+    /// Share of the plan's sideways velocity (pelvis heading frame) left out of the
+    /// desired velocity while the heading error is large (none below `turn_from`, all
+    /// of this share from 0.6 rad above it) \[-\]: a body turning back steps round
+    /// instead of being pushed sideways by the residual. Absent in older files: 0 (off).
+    #[serde(default)]
+    pub turn_lat_share: f64,
+    /// Heading error from which `turn_lat_share` and `side_step_gain` start to act
+    /// \[rad\]: paths bend below it; a stumble on gravel or stairs can yaw the pelvis
+    /// past it too. Absent in older files: 0.6 rad.
+    #[serde(default = "default_turn_from")]
+    pub turn_from: f64,
+}
+
+fn default_turn_from() -> f64 {
+    0.6
 }
 
 impl FormParams {
@@ -137,6 +164,9 @@ impl FormParams {
             swing_lead: l(self.swing_lead, b.swing_lead),
             rough_fwd_gain: l(self.rough_fwd_gain, b.rough_fwd_gain),
             pitch_fwd_gain: l(self.pitch_fwd_gain, b.pitch_fwd_gain),
+            side_step_gain: l(self.side_step_gain, b.side_step_gain),
+            turn_lat_share: l(self.turn_lat_share, b.turn_lat_share),
+            turn_from: l(self.turn_from, b.turn_from),
         }
     }
 
@@ -170,6 +200,15 @@ impl FormParams {
         }
         if !(self.pitch_fwd_gain >= 0.0 && self.pitch_fwd_gain < 2.0) {
             return bad("pitch_fwd_gain", "must be in [0, 2) m/rad");
+        }
+        if !(self.side_step_gain >= 0.0 && self.side_step_gain < 1.0) {
+            return bad("side_step_gain", "must be in [0, 1) s");
+        }
+        if !(self.turn_lat_share >= 0.0 && self.turn_lat_share <= 1.0) {
+            return bad("turn_lat_share", "must be in [0, 1]");
+        }
+        if !(self.turn_from >= 0.0 && self.turn_from < 3.0) {
+            return bad("turn_from", "must be in [0, 3) rad");
         }
         if !(self.push_err_gain >= 0.0 && self.push_err_gain < 1.0) {
             return bad("push_err_gain", "must be in [0, 1) s");
@@ -299,6 +338,24 @@ mod tests {
         let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
             .unwrap_err();
         assert!(e.to_string().contains("pitch_fwd_gain"), "{e}");
+        let mut bad = GaitParams::default();
+        bad.crouch.side_step_gain = -0.1;
+        let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
+            .unwrap_err();
+        assert!(e.to_string().contains("side_step_gain"), "{e}");
+        let mut bad = GaitParams::default();
+        bad.walk.turn_lat_share = 1.5;
+        let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
+            .unwrap_err();
+        assert!(e.to_string().contains("turn_lat_share"), "{e}");
+        let mut bad = GaitParams::default();
+        bad.run.turn_from = -0.1;
+        let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
+            .unwrap_err();
+        assert!(e.to_string().contains("turn_from"), "{e}");
+        // Files without the turn-back fields keep the old gait.
+        let p = GaitParams::default();
+        assert_eq!((p.crouch.turn_from, p.crouch.turn_lat_share), (0.6, 0.0));
         let e =
             GaitParams::from_toml("version = 1\n[walk]\nfoo = 1", Path::new("y.toml")).unwrap_err();
         assert!(e.to_string().contains("y.toml"), "{e}");
