@@ -20,17 +20,19 @@
 //!   (`slip_gain`, bounded); a swing limb lands further ahead when the body is faster
 //!   than desired (`place_gain`), and the sweep slows while the body pitches onto its
 //!   head (`dive_slowdown`).
-//! - Terrain: each contact's height comes from the local height map; the desired
-//!   pelvis height follows the mean ground under the contacts; where the map is
-//!   stepped or bumpy (stairs, gravel: `rough_step`) the top speed may fall to
-//!   `rough_speed` (off in the shipped file).
+//! - Terrain: each contact's height comes from the local height map (beyond its
+//!   front edge, where the hands land, from the plan's ground with `ground_ahead`);
+//!   the desired pelvis height follows the mean ground under the contacts (the
+//!   pitch, with `slope_pitch`, the ground's rise); where the map is stepped or bumpy
+//!   (stairs, gravel: `rough_step`) the top speed may fall to `rough_speed` (these
+//!   three off in the shipped file).
 //! - Getting down and up are joint-space blends over a fixed time from the joint
 //!   angles at the switch to the crawl's (or standing) pose, with the residual
 //!   wrench holding height rate and attitude.
 //! - A bounded residual root wrench (capped by [`ControllerSettings`]) helps with
-//!   speed, height and attitude (its torque budget to roll first with `roll_first`,
-//!   from a roll of `roll_first_from`, or to yaw last with `yaw_last`; all off in the
-//!   shipped file); it is reported like the biped's.
+//!   speed, height and attitude (its torque budget to roll first with `roll_first`
+//!   once the body leans past `roll_first_from`, 0.25 rad in the shipped file, or to
+//!   yaw last with `yaw_last`, off); it is reported like the biped's.
 
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
