@@ -321,8 +321,11 @@ pub fn crawls_under_a_0_6_m_ceiling(kind: BackendKind) {
 
 /// Falls allowed in MuJoCo over 16 rollouts of 10 s on the gravel and stair strips of
 /// `plamo eval locomotion` (straight, 0.5 and 1 m/s, four staggered starts each, from
-/// standing). Measured: 5 (0 / 2 on gravel, 1 / 2 on stairs); 9 with the crawl of
-/// 6719f45, which went up to 1.05 m/s (0 / 2, 3 / 4).
+/// standing). Measured: 3 (0 / 1 on gravel, 1 / 1 on stairs) since roll first from
+/// 0.25 rad (595d9d0), 6 before it (0 / 3, 1 / 2; 5 on an older tree), 8 with
+/// `ground_ahead` on top (2 / 2, 1 / 3; the same protocol as `crawl_sweep mujoco
+/// 0.5,1.0 0.4 10 4 straight rough,stairs`); 9 with the crawl of 6719f45, which went
+/// up to 1.05 m/s (0 / 2, 3 / 4).
 #[cfg(feature = "mujoco")]
 const TERRAIN_FALLS: u32 = 6;
 
