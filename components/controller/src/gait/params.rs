@@ -354,7 +354,12 @@ mod tests {
             .unwrap_err();
         assert!(e.to_string().contains("turn_from"), "{e}");
         // Files without the turn-back fields keep the old gait.
-        let p = GaitParams::default();
+        let old: String = DEFAULT_GAIT_PARAMS
+            .lines()
+            .filter(|l| !l.starts_with("turn_"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let p = GaitParams::from_toml(&old, Path::new("old.toml")).unwrap();
         assert_eq!((p.crouch.turn_from, p.crouch.turn_lat_share), (0.6, 0.0));
         let e =
             GaitParams::from_toml("version = 1\n[walk]\nfoo = 1", Path::new("y.toml")).unwrap_err();
