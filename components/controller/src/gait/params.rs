@@ -323,36 +323,22 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("version 9"), "{e}");
-        let mut bad = GaitParams::default();
-        bad.walk.step_time = 0.0;
-        let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
-            .unwrap_err();
-        assert!(e.to_string().contains("[walk]"), "{e}");
-        let mut bad = GaitParams::default();
-        bad.run.rough_fwd_gain = -0.01;
-        let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
-            .unwrap_err();
-        assert!(e.to_string().contains("rough_fwd_gain"), "{e}");
-        let mut bad = GaitParams::default();
-        bad.run.pitch_fwd_gain = -0.5;
-        let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
-            .unwrap_err();
-        assert!(e.to_string().contains("pitch_fwd_gain"), "{e}");
-        let mut bad = GaitParams::default();
-        bad.crouch.side_step_gain = -0.1;
-        let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
-            .unwrap_err();
-        assert!(e.to_string().contains("side_step_gain"), "{e}");
-        let mut bad = GaitParams::default();
-        bad.walk.turn_lat_share = 1.5;
-        let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
-            .unwrap_err();
-        assert!(e.to_string().contains("turn_lat_share"), "{e}");
-        let mut bad = GaitParams::default();
-        bad.run.turn_from = -0.1;
-        let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
-            .unwrap_err();
-        assert!(e.to_string().contains("turn_from"), "{e}");
+        // One field out of range at a time: the message names it (or its section).
+        let spoiled: [(fn(&mut GaitParams), &str); 6] = [
+            (|p| p.walk.step_time = 0.0, "[walk]"),
+            (|p| p.run.rough_fwd_gain = -0.01, "rough_fwd_gain"),
+            (|p| p.run.pitch_fwd_gain = -0.5, "pitch_fwd_gain"),
+            (|p| p.crouch.side_step_gain = -0.1, "side_step_gain"),
+            (|p| p.walk.turn_lat_share = 1.5, "turn_lat_share"),
+            (|p| p.run.turn_from = -0.1, "turn_from"),
+        ];
+        for (spoil, field) in spoiled {
+            let mut bad = GaitParams::default();
+            spoil(&mut bad);
+            let e = GaitParams::from_toml(&toml::to_string(&bad).unwrap(), Path::new("x.toml"))
+                .unwrap_err();
+            assert!(e.to_string().contains(field), "{field}: {e}");
+        }
         // Files without the turn-back fields keep the old gait.
         let old: String = DEFAULT_GAIT_PARAMS
             .lines()
