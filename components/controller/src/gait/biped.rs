@@ -32,8 +32,9 @@
 //!   height and tilt; it is part of the action and reported by the metrics.
 
 use super::ik::{LegGeometry, leg_ik};
-use super::map_plane::MapPlane;
+use super::map_plane::{MAP_HALF, MapPlane};
 use super::params::GaitParams;
+use super::plan_ground::PlanGround;
 
 use plamo_interfaces::CONTROL_DT;
 use plamo_physics::humanoid::{BODIES, JOINTS, joint_index, shape_mass};
@@ -226,32 +227,14 @@ const SLOPE_SPAN: f64 = 0.8;
 /// the plan's waypoints, interpolated along the heading.
 struct Ground<'a> {
     map: &'a [f64],
-    /// Forward distance and ground height of the waypoints ahead of the map, in
-    /// increasing distance \[m\].
-    ahead: [(f64, f64); crate::observation::NUM_WAYPOINTS],
-    n_ahead: usize,
+    plan: PlanGround,
 }
-
-/// Half the local map's extent \[m\].
-const MAP_HALF: f64 = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0 * LOCAL_MAP_SPACING;
 
 impl<'a> Ground<'a> {
     fn new(obs: &'a Observation) -> Self {
-        let mut ahead = [(0.0, 0.0); crate::observation::NUM_WAYPOINTS];
-        let mut n_ahead = 0;
-        let mut last = MAP_HALF;
-        for (w, g) in obs.waypoints.iter().zip(obs.waypoint_ground) {
-            let x = w[0] + obs.head_pos[0];
-            if x > last + 0.05 {
-                ahead[n_ahead] = (x, g);
-                n_ahead += 1;
-                last = x;
-            }
-        }
         Self {
             map: &obs.height_map,
-            ahead,
-            n_ahead,
+            plan: PlanGround::new(obs, false),
         }
     }
 
@@ -273,18 +256,7 @@ impl<'a> Ground<'a> {
 
     /// Ground height at a heading-frame point.
     fn at(&self, x: f64, y: f64) -> f64 {
-        let edge = self.map_at(x, y);
-        if x <= MAP_HALF {
-            return edge;
-        }
-        let mut prev = (MAP_HALF, edge);
-        for &(xw, gw) in &self.ahead[..self.n_ahead] {
-            if x <= xw {
-                return prev.1 + (gw - prev.1) * (x - prev.0) / (xw - prev.0);
-            }
-            prev = (xw, gw);
-        }
-        prev.1
+        self.plan.extend(x, self.map_at(x, y))
     }
 
     /// Highest ground under a sole whose ankle is at (x, y): what the foot rests on.

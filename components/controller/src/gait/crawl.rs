@@ -44,10 +44,11 @@ use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
 use super::map_plane::MapPlane;
 use super::params::{parse_toml, read_params};
+use super::plan_ground::PlanGround;
 use super::{residual_force, residual_wrench};
 use crate::error::{ControllerError, Result};
 use crate::math::{sub3, wrap_angle};
-use crate::observation::{NUM_WAYPOINTS, Observation, WAYPOINT_SPACING};
+use crate::observation::{Observation, WAYPOINT_SPACING};
 use crate::policy::{Action, RootWrench};
 use crate::settings::{ControllerSettings, GRAVITY};
 
@@ -574,45 +575,26 @@ fn limb_ik(l1: f64, l2: f64, bend: f64, up: bool, p: [f64; 3]) -> [f64; 3] {
     [qx, phi - bend * beta, bend * bend_angle]
 }
 
-/// Forward distance of the local height map's front row from the root \[m\].
-const MAP_FRONT: f64 = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0 * LOCAL_MAP_SPACING;
-
 /// Terrain under the crawl's contacts, relative to the ground under the root (see
 /// `ground_ahead`).
 struct Ground<'a> {
     map: &'a [f64],
-    /// Forward distance and ground height of the plan's waypoints ahead of the map,
-    /// in increasing distance \[m\] (none without `ground_ahead`).
-    ahead: [(f64, f64); NUM_WAYPOINTS],
-    n_ahead: usize,
+    /// The plan's ground beyond the map ([`PlanGround::NONE`] without `ground_ahead`).
+    plan: PlanGround,
 }
 
 impl<'a> Ground<'a> {
-    /// The height map of `obs`, and with `ahead` the waypoints that lie ahead of its
-    /// front row, each at least 5 cm further than the one before (a plan turning
-    /// back or standing still adds nothing) and within 45 degrees of straight ahead
-    /// (a plan off to the side has its ground elsewhere than under the hands).
+    /// The height map of `obs`, and with `ahead` the plan's waypoints straight ahead
+    /// of its front row.
     fn new(obs: &'a Observation, ahead: bool) -> Self {
-        let mut g = Ground {
+        Ground {
             map: &obs.height_map,
-            ahead: [(0.0, 0.0); NUM_WAYPOINTS],
-            n_ahead: 0,
-        };
-        if !ahead {
-            return g;
+            plan: if ahead {
+                PlanGround::new(obs, true)
+            } else {
+                PlanGround::NONE
+            },
         }
-        let mut last = MAP_FRONT;
-        for (w, &h) in obs.waypoints.iter().zip(&obs.waypoint_ground) {
-            // Waypoints are relative to the head; the map to the root.
-            let x = w[0] + obs.head_pos[0];
-            let y = w[1] + obs.head_pos[1];
-            if x > last + 0.05 && y.abs() <= x {
-                g.ahead[g.n_ahead] = (x, h);
-                g.n_ahead += 1;
-                last = x;
-            }
-        }
-        g
     }
 
     /// Height at a heading-frame point (x forward, y left of the root) \[m\]:
@@ -628,17 +610,7 @@ impl<'a> Ground<'a> {
         let h = |i: f64, j: f64| self.map[i as usize * LOCAL_MAP_SIDE + j as usize];
         let edge = (1.0 - fr) * ((1.0 - fc) * h(r0, c0) + fc * h(r0, c0 + 1.0))
             + fr * ((1.0 - fc) * h(r0 + 1.0, c0) + fc * h(r0 + 1.0, c0 + 1.0));
-        if x <= MAP_FRONT || self.n_ahead == 0 {
-            return edge;
-        }
-        let mut prev = (MAP_FRONT, edge);
-        for &(xw, hw) in &self.ahead[..self.n_ahead] {
-            if x <= xw {
-                return prev.1 + (hw - prev.1) * (x - prev.0) / (xw - prev.0);
-            }
-            prev = (xw, hw);
-        }
-        prev.1
+        self.plan.extend(x, edge)
     }
 }
 
@@ -1211,6 +1183,7 @@ impl CrawlGait {
 mod tests {
     use super::*;
     use crate::gait::map_plane::map_coord;
+    use crate::observation::NUM_WAYPOINTS;
 
     #[test]
     fn built_in_parameters_validate_and_bad_ones_name_the_field() {

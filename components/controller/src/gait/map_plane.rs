@@ -4,6 +4,9 @@
 
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
+/// Distance of the map's first and last rows (and columns) from its centre \[m\].
+pub(crate) const MAP_HALF: f64 = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0 * LOCAL_MAP_SPACING;
+
 /// Distance of map row (or column) `i`'s samples from the map's centre \[m\].
 pub(crate) fn map_coord(i: usize) -> f64 {
     (i as f64 - (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0) * LOCAL_MAP_SPACING

@@ -13,6 +13,7 @@ mod crawl;
 mod ik;
 mod map_plane;
 mod params;
+mod plan_ground;
 
 pub use crawl::{CRAWL_PARAMS_VERSION, CrawlParams, DEFAULT_CRAWL_PARAMS};
 pub use ik::{LegGeometry, leg_fk, leg_ik};

@@ -324,7 +324,8 @@ mod tests {
         .unwrap_err();
         assert!(e.to_string().contains("version 9"), "{e}");
         // One field out of range at a time: the message names it (or its section).
-        let spoiled: [(fn(&mut GaitParams), &str); 6] = [
+        type Spoil = fn(&mut GaitParams);
+        let spoiled: [(Spoil, &str); 6] = [
             (|p| p.walk.step_time = 0.0, "[walk]"),
             (|p| p.run.rough_fwd_gain = -0.01, "rough_fwd_gain"),
             (|p| p.run.pitch_fwd_gain = -0.5, "pitch_fwd_gain"),
