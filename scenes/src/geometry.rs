@@ -93,6 +93,17 @@ impl FootprintFrame {
         [c * dx + s * dy, -s * dx + c * dy]
     }
 
+    /// Whether every point within `reach` of (x, y) lies further than `clear` from
+    /// the rectangle \[m\]: a sure answer from its bounding circle, without a
+    /// distance per point (false may still be clear).
+    pub fn clear_of_disc(&self, x: f64, y: f64, reach: f64, clear: f64) -> bool {
+        let [cx, cy] = self.footprint.center;
+        let [hx, hy] = self.footprint.half_extents;
+        // The rectangle lies within hypot(hx, hy) of its centre; the margin keeps
+        // rounding from ever skipping a distance the exact test would need.
+        (x - cx).hypot(y - cy) - hx.hypot(hy) - reach > clear + 1e-6
+    }
+
     /// Signed distance from (x, y) to the rectangle: negative inside \[m\].
     pub fn signed_distance(&self, x: f64, y: f64) -> f64 {
         let [lx, ly] = self.to_local(x, y);
@@ -107,6 +118,37 @@ impl FootprintFrame {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_disc_clear_of_the_bounding_circle_is_clear_of_the_box() {
+        let f = Footprint {
+            center: [1.0, 1.0],
+            half_extents: [2.0, 0.5],
+            yaw: 0.3,
+        }
+        .frame();
+        let (reach, clear) = (1.3, 0.25);
+        let mut skipped = 0;
+        for i in -40..=40 {
+            for j in -40..=40 {
+                let (x, y) = (1.0 + 0.15 * i as f64, 1.0 + 0.15 * j as f64);
+                if !f.clear_of_disc(x, y, reach, clear) {
+                    continue;
+                }
+                skipped += 1;
+                // Every point of the disc's rim and centre is clear.
+                for k in 0..32 {
+                    let a = k as f64 * std::f64::consts::TAU / 32.0;
+                    let (px, py) = (x + reach * a.cos(), y + reach * a.sin());
+                    assert!(f.signed_distance(px, py) > clear, "({x}, {y}) at {a}");
+                }
+            }
+        }
+        // Far enough out, most centres are skipped; near the box none is.
+        assert!(skipped > 3000, "{skipped}");
+        assert!(!f.clear_of_disc(1.0, 1.0, reach, clear));
+        assert!(!f.clear_of_disc(1.0, 2.9, reach, clear));
+    }
 
     #[test]
     fn signed_distance_of_rotated_box() {

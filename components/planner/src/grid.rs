@@ -147,14 +147,25 @@ pub(crate) fn crawl_body_clear(
         t.origin[0] + (t.nx - 1) as f64 * t.resolution - w,
         t.origin[1] + (t.ny - 1) as f64 * t.resolution - w,
     ];
-    (0..=n).all(|k| {
+    let point = |k: usize| {
         let back = s.crawl_body_length * (2.0 * k as f64 / n as f64 - 1.0);
-        let (px, py) = (x - back * cos, y - back * sin);
-        // The terrain's edge is a drop: a body over it falls off the world.
-        (lo[0]..=hi[0]).contains(&px)
-            && (lo[1]..=hi[1]).contains(&py)
-            && walls.iter().all(|wall| wall.signed_distance(px, py) >= w)
-    })
+        (x - back * cos, y - back * sin)
+    };
+    // The terrain's edge is a drop: a body over it falls off the world.
+    (0..=n).all(|k| {
+        let (px, py) = point(k);
+        (lo[0]..=hi[0]).contains(&px) && (lo[1]..=hi[1]).contains(&py)
+    }) && walls
+        .iter()
+        // Most walls are further than a body length away: one bound each, not a
+        // distance per point (the refiner asks this at every sample of a crawl).
+        .filter(|wall| !wall.clear_of_disc(x, y, s.crawl_body_length, w))
+        .all(|wall| {
+            (0..=n).all(|k| {
+                let (px, py) = point(k);
+                wall.signed_distance(px, py) >= w
+            })
+        })
 }
 
 /// Clear `free` (a grid of `nx` x `ny` cells `res` apart from `t`'s origin) within
