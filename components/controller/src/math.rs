@@ -47,6 +47,12 @@ pub(crate) fn from_heading_frame(heading: f64, v: [f64; 3]) -> [f64; 3] {
 }
 
 /// Wraps an angle into (-pi, pi].
+/// 0 at `s` <= 0, 1 at `s` >= 1, cubic with zero slope at both ends between.
+pub(crate) fn smoothstep(s: f64) -> f64 {
+    let s = s.clamp(0.0, 1.0);
+    s * s * (3.0 - 2.0 * s)
+}
+
 pub(crate) fn wrap_angle(a: f64) -> f64 {
     let mut a = (a + PI).rem_euclid(2.0 * PI) - PI;
     if a <= -PI {

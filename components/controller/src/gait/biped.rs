@@ -42,7 +42,7 @@ use plamo_physics::{FEET, NUM_BODIES, NUM_JOINTS};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
 use super::{residual_force, residual_wrench};
-use crate::math::{clamp_norm, sub3, wrap_angle};
+use crate::math::{clamp_norm, smoothstep, sub3, wrap_angle};
 use crate::observation::{Observation, WAYPOINT_SPACING};
 use crate::policy::{Action, RootWrench};
 use crate::settings::ControllerSettings;
@@ -314,8 +314,7 @@ impl<'a> Ground<'a> {
 /// (paths bend), all of it from `from` + [`TURN_FADE`] (the plan leads off sideways or
 /// backwards), smooth in between.
 fn turn_weight(heading_err: f64, from: f64) -> f64 {
-    let t = ((heading_err.abs() - from) / TURN_FADE).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
+    smoothstep((heading_err.abs() - from) / TURN_FADE)
 }
 
 /// The swing foot's sideways target `y` \[m\] (heading frame, from the root) for a body
@@ -450,7 +449,7 @@ impl BipedGait {
         // The PD servo lags a moving target by kd/kp: follow the path that far ahead.
         let lead = JOINTS[j.hip[0][1]].kd / self.hip_kp + form.swing_lead;
         let s_lin = ((self.phase + lead) / step_time).min(1.0);
-        let s = s_lin * s_lin * (3.0 - 2.0 * s_lin);
+        let s = smoothstep(s_lin);
         // Forward placement is measured from the centre of mass (body origins weighted
         // by body mass): a leaning or crouching trunk carries it ahead of the pelvis.
         let com_x: f64 = self

@@ -47,7 +47,7 @@ use super::params::{parse_toml, read_params};
 use super::plan_ground::PlanGround;
 use super::{residual_force, residual_wrench};
 use crate::error::{ControllerError, Result};
-use crate::math::{sub3, wrap_angle};
+use crate::math::{smoothstep, sub3, wrap_angle};
 use crate::observation::{Observation, WAYPOINT_SPACING};
 use crate::policy::{Action, RootWrench};
 use crate::settings::{ControllerSettings, GRAVITY};
@@ -533,11 +533,6 @@ fn rot_y(a: f64, v: [f64; 3]) -> [f64; 3] {
 
 fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-fn smoothstep(s: f64) -> f64 {
-    let s = s.clamp(0.0, 1.0);
-    s * s * (3.0 - 2.0 * s)
 }
 
 /// Smallest lever of the X hinge \[m\]: a limb pointing along its parent's X axis
@@ -1182,6 +1177,16 @@ impl CrawlGait {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An observation of the humanoid with its root 0.5 m up (a crawl's), the rest 0.
+    fn crawling_obs() -> Observation {
+        let mut obs = Observation::new(crate::observation::ObservationLayout {
+            num_joints: NUM_JOINTS,
+            num_bodies: BODIES.len(),
+        });
+        obs.root_height = 0.5;
+        obs
+    }
     use crate::gait::map_plane::map_coord;
     use crate::observation::NUM_WAYPOINTS;
 
@@ -1206,13 +1211,8 @@ mod tests {
     /// A settled crawl asked for 1 m/s straight ahead over a height map; the speed it
     /// commands after 4 s.
     fn commanded_speed(params: CrawlParams, map: impl Fn(f64, f64) -> f64) -> f64 {
-        use crate::observation::{NUM_WAYPOINTS, ObservationLayout};
-        let layout = ObservationLayout {
-            num_joints: NUM_JOINTS,
-            num_bodies: BODIES.len(),
-        };
-        let mut obs = Observation::new(layout);
-        obs.root_height = 0.5;
+        use crate::observation::NUM_WAYPOINTS;
+        let mut obs = crawling_obs();
         for i in 0..NUM_WAYPOINTS {
             obs.waypoints[i] = [(i + 1) as f64 * WAYPOINT_SPACING, 0.0, 0.0];
             obs.waypoint_speeds[i] = 1.0;
@@ -1259,14 +1259,8 @@ mod tests {
 
     #[test]
     fn roll_comes_first_in_the_residual_torque() {
-        use crate::observation::ObservationLayout;
         let roll_torque = |params: CrawlParams| {
-            let layout = ObservationLayout {
-                num_joints: NUM_JOINTS,
-                num_bodies: BODIES.len(),
-            };
-            let mut obs = Observation::new(layout);
-            obs.root_height = 0.5;
+            let mut obs = crawling_obs();
             // Rolled 0.4 rad (right side low) while the yaw wags at 2 rad/s.
             let roll: f64 = 0.4;
             obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
@@ -1349,15 +1343,9 @@ mod tests {
 
     #[test]
     fn the_hands_see_the_plans_ground_beyond_the_map() {
-        use crate::observation::ObservationLayout;
-        let layout = ObservationLayout {
-            num_joints: NUM_JOINTS,
-            num_bodies: BODIES.len(),
-        };
         // Flat under the body (the map), a tread 0.15 m up under the plan ahead: the
         // crawl's head 0.6 m ahead of the root, its waypoints from 0.85 m on.
-        let mut obs = Observation::new(layout);
-        obs.root_height = 0.5;
+        let mut obs = crawling_obs();
         obs.head_pos = [0.6, 0.0, -0.15];
         for i in 0..NUM_WAYPOINTS {
             obs.waypoints[i] = [0.25 * (i + 1) as f64, 0.0, 0.0];
@@ -1395,19 +1383,13 @@ mod tests {
 
     #[test]
     fn the_body_pitches_up_stairs_only_with_slope_pitch() {
-        use crate::observation::ObservationLayout;
         // The body's desired pelvis pitch after 1.5 s at rest over stairs of 0.15 m x
         // 0.31 m rising (`up`) or falling ahead, the plan's ground beyond the map on
         // the same stairs.
         let pitch = |params: CrawlParams, up: bool| {
-            let layout = ObservationLayout {
-                num_joints: NUM_JOINTS,
-                num_bodies: BODIES.len(),
-            };
             let sign = if up { 1.0 } else { -1.0 };
             let stairs = |x: f64| sign * 0.15 * (x / 0.31).floor();
-            let mut obs = Observation::new(layout);
-            obs.root_height = 0.5;
+            let mut obs = crawling_obs();
             obs.head_pos = [0.6, 0.0, -0.15];
             for r in 0..LOCAL_MAP_SIDE {
                 for c in 0..LOCAL_MAP_SIDE {
