@@ -124,6 +124,22 @@ pub fn predict(scene: &Scene, how: Prediction, now: f64, k: usize, t: f64) -> Ob
     }
 }
 
+/// Predicted state at absolute time `t` of obstacle `k`, numbered as in [`Conflict`]:
+/// the scene's first, then the host's `external` ones.
+pub fn predict_any(
+    scene: &Scene,
+    external: External,
+    how: Prediction,
+    now: f64,
+    k: usize,
+    t: f64,
+) -> ObstacleState {
+    match k.checked_sub(scene.dynamic.len()) {
+        None => predict(scene, how, now, k, t),
+        Some(j) => external.obstacles[j].state_at(external.observed, t),
+    }
+}
+
 fn v3(p: [f64; 3]) -> Vec3 {
     Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)
 }
@@ -178,10 +194,7 @@ pub fn predict_conflict_with(
         None => scene.dynamic[k].shape,
         Some(j) => external.obstacles[j].shape,
     };
-    let state = |k: usize, t: f64| match k.checked_sub(nd) {
-        None => predict(scene, how, now, k, t),
-        Some(j) => external.obstacles[j].state_at(external.observed, t),
-    };
+    let state = |k: usize, t: f64| predict_any(scene, external, how, now, k, t);
     let dt = s.collision_dt;
     let steps = (s.collision_horizon / dt).ceil() as usize;
     let r = s.character_radius;

@@ -11,7 +11,9 @@ use serde::{Deserialize, Serialize};
 use crate::alt::AltLandmarks;
 use crate::astar::{AStar, CrawlBody, GridPath, Posture, SearchLimits};
 use crate::connectivity::Components;
-use crate::dynamic::{Conflict, External, ExternalObstacle, Prediction, predict_conflict_with};
+use crate::dynamic::{
+    Conflict, External, ExternalObstacle, Prediction, predict_any, predict_conflict_with,
+};
 use crate::grid::PlanGrid;
 use crate::refine::{PathPoint, RefineCtx, annotate, refine};
 use crate::speed_oracle::SpeedProblem;
@@ -523,6 +525,19 @@ impl Planner {
             let o = conflict.obstacle_position;
             let rad = conflict.radius_xy + s.character_radius + s.obstacle_margin;
             discs.push([o[0], o[1], rad]);
+            // Along its way after the conflict, one disc per half radius it moves (one
+            // coming head-on may cover the character: `start_cell` then steps aside).
+            let later = |t: f64| {
+                let p = predict_any(&self.scene, self.external(), how, now, conflict.obstacle, t)
+                    .position;
+                [p[0], p[1]]
+            };
+            let end = later(conflict.time + s.obstacle_sweep);
+            let n = ((end[0] - o[0]).hypot(end[1] - o[1]) / (0.5 * rad)).ceil() as usize;
+            for i in 1..=n {
+                let p = later(conflict.time + s.obstacle_sweep * i as f64 / n as f64);
+                discs.push([p[0], p[1], rad]);
+            }
             // Rejoin beyond the last old point near any disc.
             let near = |p: &PathPoint| {
                 discs

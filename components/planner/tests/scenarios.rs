@@ -316,6 +316,96 @@ fn dynamic_replan_avoids_a_ball_crossing_the_path() {
 }
 
 #[test]
+fn with_obstacle_sweep_the_detour_passes_behind_a_crossing_ball() {
+    // The ball of the test above, its line where the runner's plan meets it.
+    let probe = Planner::new(
+        ball_scene(100.0),
+        "run from the a to the b",
+        [2.0, 5.0],
+        PlannerSettings::default(),
+    )
+    .unwrap();
+    let x_meet = probe.route()[0].sample_at(7.5).position[0];
+    let scene = ball_scene(x_meet);
+    // Which side of the ball the first detour crosses its line on, relative to the
+    // way the ball moves (> 0: ahead of it, < 0: behind it).
+    let side = |sweep: f64| {
+        let s = PlannerSettings {
+            obstacle_sweep: sweep,
+            ..Default::default()
+        };
+        let mut p = Planner::new(scene.clone(), "run from the a to the b", [2.0, 5.0], s).unwrap();
+        let mut tick = 0;
+        loop {
+            assert!(tick < 120 * 12, "no re-plan around the ball");
+            let out = step_on_plan(&mut p, tick);
+            if let Some(ReplanReason::Obstacle(c)) = out.replanned {
+                let tr = p.current().unwrap();
+                let q = tr
+                    .points
+                    .iter()
+                    .min_by(|a, b| (a.x - x_meet).abs().total_cmp(&(b.x - x_meet).abs()))
+                    .unwrap();
+                let vy = scene.dynamic[0].motion.state_at(c.time).velocity[1];
+                return (q.y - c.obstacle_position[1]) * vy.signum();
+            }
+            tick += 4;
+        }
+    };
+    let swept = side(3.0);
+    assert!(swept < -0.6, "behind the ball by {swept} m");
+    // Blocked only where the ball is at the conflict, the detour goes ahead of it:
+    // the case the sweep is for.
+    let point = side(0.0);
+    assert!(point > 0.6, "ahead of the ball by {point} m");
+}
+
+#[test]
+fn obstacle_sweep_leaves_a_way_past_an_obstacle_coming_head_on() {
+    // A box the host reports rolling straight at the runner along the corridor: its
+    // swept way covers the runner, who must still find a way past it.
+    let s = PlannerSettings {
+        obstacle_sweep: 3.0,
+        ..Default::default()
+    };
+    let mut p = Planner::new(empty_corridor(), "run from the a to the b", [2.0, 5.0], s).unwrap();
+    let cart = ExternalObstacle {
+        shape: ObstacleShape::Box {
+            half_extents: [0.5, 0.4, 0.5],
+        },
+        state: ObstacleState {
+            position: [20.0, 5.0, 0.5],
+            velocity: [-1.5, 0.0, 0.0],
+        },
+    };
+    p.set_external_obstacles(0.0, &[cart]).unwrap();
+    let (mut tick, mut replanned, mut finished) = (0, false, false);
+    let mut min_gap = f64::INFINITY;
+    while tick < 120 * 40 {
+        let now = tick as f64 / 120.0;
+        let out = step_on_plan(&mut p, tick);
+        assert!(
+            !matches!(out.status, PlanStatus::Infeasible { .. }),
+            "t = {now}: {:?}",
+            out.status
+        );
+        replanned |= matches!(out.replanned, Some(ReplanReason::Obstacle(_)));
+        let w = p.current().unwrap().sample_at(now);
+        let o = cart.state_at(0.0, now).position;
+        min_gap = min_gap.min((w.position[0] - o[0]).hypot(w.position[1] - o[1]));
+        if out.status == PlanStatus::Finished {
+            finished = true;
+            break;
+        }
+        tick += 4;
+    }
+    assert!(replanned, "re-planned around the box");
+    assert!(finished, "reached b past the box");
+    // The box's half-diagonal 0.64 m + character radius 0.3 m.
+    assert!(min_gap > 0.64 + 0.3, "closest approach {min_gap} m");
+}
+
+#[test]
 fn stepping_reaches_every_target_in_order() {
     let scene = flat_scene();
     let mut p = Planner::new(
