@@ -305,3 +305,53 @@ fn a_random_tour_replays_with_plamo_run() {
     assert_ne!(digests[0], digests[1], "the planner file changed nothing");
     assert_ne!(digests[0], digests[2], "the crawl file changed nothing");
 }
+
+/// dynamic.md's replay command, run in the eval's folder as written, retraces the
+/// re-planned run bit for bit: the corridor scene and the sweep's planner settings
+/// (its walking speed and the `--planner-params` file's fields) come as files.
+#[test]
+fn a_dynamic_run_replays_with_plamo_run() {
+    let out = tmp("dynamic-replay");
+    let o = RunOptions {
+        planner: Some(plamo_planner::PlannerSettings {
+            obstacle_margin: 0.35,
+            ..Default::default()
+        }),
+        max_seconds: Some(3.0),
+        ..opts(&out, 1, Shard::ALL)
+    };
+    eval::run(&Dynamic::new(1, 3).unwrap(), &o).unwrap();
+    let runs = Table::parse(
+        &std::fs::read_to_string(out.join("runs.csv")).unwrap(),
+        "runs",
+    )
+    .unwrap();
+    let row = (0..runs.rows.len())
+        .find(|&r| runs.flag(r, "replanning").unwrap())
+        .unwrap();
+    let digest = runs.str(row, "digest").unwrap().to_string();
+    let md = std::fs::read_to_string(out.join("dynamic.md")).unwrap();
+    let line = md
+        .lines()
+        .find(|l| l.starts_with("plamo run --scene crossing-3.toml "))
+        .unwrap_or_else(|| panic!("no replay command in\n{md}"));
+    let planner = std::fs::read_to_string(out.join("planner-replanning.toml")).unwrap();
+    for field in ["walk_speed = 1.5", "obstacle_margin = 0.35"] {
+        assert!(planner.contains(field), "{field} not in\n{planner}");
+    }
+    let cmd = format!(
+        "cd {} && {} --quiet --out replayed",
+        out.display(),
+        line.replacen("plamo", env!("CARGO_BIN_EXE_plamo"), 1)
+            .split(" --out ")
+            .next()
+            .unwrap(),
+    );
+    let o = Command::new("sh").args(["-c", &cmd]).output().unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains(&format!("trajectory digest {digest}")),
+        "{cmd}\n{text}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}

@@ -16,7 +16,9 @@ use plamo_scenes::{Motion, ObstacleShape, Scene};
 use plotters::style::RGBColor;
 use serde::{Deserialize, Serialize};
 
-use super::episode::{EpisodeSpec, parse_track, plan, run_episode};
+use super::episode::{
+    EpisodeSpec, TIME_LIMIT_EXTRA, TIME_LIMIT_FACTOR, parse_track, plan, run_episode,
+};
 use super::plot::{Bar, bars};
 use super::random::Z95;
 use super::table::field;
@@ -68,6 +70,14 @@ fn r2(v: f64) -> f64 {
 
 /// Corridor scene `seed`: three obstacles crossing the way, timed against the plan.
 pub fn scene(seed: u64) -> anyhow::Result<Scene> {
+    Ok(plamo_scenes::from_toml_str(
+        &scene_file(seed)?.to_toml(),
+        "crossing",
+    )?)
+}
+
+/// [`scene`] as a scene file (what `plamo run --scene FILE` loads).
+pub fn scene_file(seed: u64) -> anyhow::Result<SceneFile> {
     let mid = SIZE[1] / 2.0;
     let mut file = SceneFile {
         name: format!("crossing-{seed}"),
@@ -156,10 +166,70 @@ pub fn scene(seed: u64) -> anyhow::Result<Scene> {
             },
         });
     }
-    Ok(plamo_scenes::from_toml_str(&file.to_toml(), "crossing")?)
+    Ok(file)
 }
 
-const COLUMNS: [&str; 17] = [
+/// The planner settings of the re-planning runs, written next to `eval.json` for the
+/// replay command (every field: the sweep's walking speed included).
+pub const REPLAY_PLANNER_FILE: &str = "planner-replanning.toml";
+
+/// How to watch a run with re-planning again: the scene of each re-planned run that
+/// collided and of the first scene as files (`crossing-<seed>.toml`), the re-planning
+/// runs' planner settings in `out`, and the `plamo run` command that replays the first
+/// re-planned run that collided (else the first scene's) bit for bit.
+fn replay_note(runs: &Table, meta: &Meta, out: &Path) -> anyhow::Result<String> {
+    let replanned: Vec<usize> = (0..runs.rows.len())
+        .filter(|&r| runs.flag(r, "replanning").ok() == Some(true))
+        .collect();
+    let collided: Vec<usize> = replanned
+        .iter()
+        .copied()
+        .filter(|&r| runs.flag(r, "collided").ok() == Some(true))
+        .collect();
+    let Some(&first) = collided.first().or(replanned.first()) else {
+        return Ok(String::new());
+    };
+    for &r in collided.iter().chain([&first]) {
+        let seed: u64 = runs.str(r, "scene_seed")?.parse()?;
+        std::fs::write(
+            out.join(format!("crossing-{seed}.toml")),
+            scene_file(seed)?.to_toml(),
+        )?;
+    }
+    let planner = settings(meta.planner(), true);
+    std::fs::write(out.join(REPLAY_PLANNER_FILE), toml::to_string(&planner)?)?;
+    let seed = runs.str(first, "scene_seed")?;
+    let limit = match meta.max_seconds {
+        Some(m) => m,
+        None => TIME_LIMIT_FACTOR * runs.f64(first, "planned_time")? + TIME_LIMIT_EXTRA,
+    };
+    // The gait and crawl files as the sweep wrote them; the planner's is the one above.
+    let others = Meta {
+        planner: None,
+        ..meta.clone()
+    }
+    .param_flags(Path::new(""));
+    let which = if collided.is_empty() {
+        "No re-planned run collided. The first scene's".to_string()
+    } else {
+        format!(
+            "{} re-planned run(s) collided; their scenes are `crossing-<seed>.toml` in this \
+             folder. The first one's",
+            collided.len()
+        )
+    };
+    Ok(format!(
+        "\n{which} run replays exactly, run in this folder (its trajectory digest is \
+         runs.csv's `digest`; time limit {TIME_LIMIT_FACTOR} x the planned time + \
+         {TIME_LIMIT_EXTRA} s unless `--max-seconds` was given):\n\n\
+         ```\nplamo run --scene crossing-{seed}.toml --instructions \"{INSTRUCTION}\" --physics \
+         {physics} --seed {seed} --max-seconds {limit} --planner-params {REPLAY_PLANNER_FILE}{others} \
+         --out crossing-{seed}\n```\n",
+        physics = meta.physics,
+    ))
+}
+
+const COLUMNS: [&str; 18] = [
     "job",
     "scene_seed",
     "replanning",
@@ -176,6 +246,7 @@ const COLUMNS: [&str; 17] = [
     "planned_time",
     "timed_out",
     "error",
+    "digest",
     "track",
 ];
 
@@ -246,6 +317,7 @@ impl Experiment for Dynamic {
                     .or(ep.run_error.as_deref())
                     .unwrap_or(""),
             ),
+            format!("{:016x}", ep.digest),
             ep.track_field(),
         ])
     }
@@ -392,6 +464,7 @@ impl Experiment for Dynamic {
         }
         render_map(&first, &overlay, &out.join("dynamic_map.png"))?;
         md.push_str("\n![collision rate](dynamic.png)\n![first scene](dynamic_map.png)\n");
+        md.push_str(&replay_note(runs, meta, out)?);
         Ok(md)
     }
 }
