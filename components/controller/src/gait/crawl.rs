@@ -38,8 +38,8 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
 use plamo_interfaces::CONTROL_DT;
+use plamo_physics::humanoid::{body_index, joint_index, BODIES, HEAD_OFFSET, JOINTS};
 use plamo_physics::NUM_JOINTS;
-use plamo_physics::humanoid::{BODIES, JOINTS, body_index, joint_index};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
 use super::map_plane::MapPlane;
@@ -244,6 +244,28 @@ pub struct CrawlParams {
     /// on any ground, as before.
     #[serde(default)]
     pub slope_pitch: f64,
+    /// Least height of the nominal head above the ground under it \[m\] (the head's
+    /// centre; the fall rule's bar is 0.2 m, a level crawl's head is ~0.35 m up): the
+    /// head is ~0.5 m ahead of the pelvis, beyond the height map, so the ground under
+    /// it comes from the plan (`Observation::waypoint_ground`). Where that ground is
+    /// higher than the mean under the four contacts (a stair's tread ahead), the
+    /// desired pelvis rises until the nominal head clears it by this much. 0: the
+    /// contacts' mean alone, as before.
+    #[serde(default)]
+    pub head_clear: f64,
+    /// Hand push per m the measured head is lower than `head_clear` above the ground
+    /// under it \[-\]: the stance hands' targets go down by this times the shortfall,
+    /// so the arms straighten and lift the front before the head sinks to the fall
+    /// rule's bar (session 11's stairs falls: pelvis pitched 0.9-1.3 rad, head
+    /// 0.20-0.23 m up). 0: off.
+    #[serde(default)]
+    pub head_push: f64,
+    /// A swinging limb clears the plan's ground at its landing point too (beyond the
+    /// map, `Observation::waypoint_ground`), not only the map's: a hand landing on a
+    /// tread above the map's front row swings over the riser's nose instead of into
+    /// it. Where it lands is unchanged (see `ground_ahead`). Off: the map's ground.
+    #[serde(default)]
+    pub swing_ahead: bool,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -349,7 +371,9 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 59] = [
+        let ranges: [(&'static str, f64, f64, f64); 61] = [
+            ("head_clear", self.head_clear, 0.0, 1.0),
+            ("head_push", self.head_push, 0.0, 10.0),
             ("slope_pitch", self.slope_pitch, 0.0, 1.5),
             ("roll_first_from", self.roll_first_from, 0.0, 1.5),
             ("rough_step", self.rough_step, 0.005, 4.0),
@@ -506,6 +530,8 @@ struct Geometry {
     spine: [f64; 3],
     /// Shoulder anchors in the torso frame (right, left) \[m\].
     shoulder: [[f64; 3]; 2],
+    /// Neck joint in the torso frame \[m\].
+    neck: [f64; 3],
     thigh: f64,
     upper_arm: f64,
     /// Elbow to the hand sphere's centre \[m\].
@@ -518,6 +544,7 @@ impl Geometry {
             hip: [body("right_thigh"), body("left_thigh")],
             spine: body("torso"),
             shoulder: [body("right_upper_arm"), body("left_upper_arm")],
+            neck: body("head"),
             thigh: -body("right_shin")[2],
             upper_arm: -body("right_lower_arm")[2],
             forearm: -body("right_hand")[2] + HAND_RADIUS,
@@ -576,19 +603,19 @@ struct Ground<'a> {
     map: &'a [f64],
     /// The plan's ground beyond the map ([`PlanGround::NONE`] without `ground_ahead`).
     plan: PlanGround,
+    /// The plan's ground beyond the map for the head, with or without `ground_ahead`.
+    beyond: PlanGround,
 }
 
 impl<'a> Ground<'a> {
     /// The height map of `obs`, and with `ahead` the plan's waypoints straight ahead
     /// of its front row.
     fn new(obs: &'a Observation, ahead: bool) -> Self {
+        let beyond = PlanGround::new(obs, true);
         Ground {
             map: &obs.height_map,
-            plan: if ahead {
-                PlanGround::new(obs, true)
-            } else {
-                PlanGround::NONE
-            },
+            plan: if ahead { beyond } else { PlanGround::NONE },
+            beyond,
         }
     }
 
@@ -596,6 +623,18 @@ impl<'a> Ground<'a> {
     /// bilinear in the map, clamped to its extent; ahead of its front row
     /// interpolated to the waypoints' ground, beyond the last the last one's.
     fn at(&self, x: f64, y: f64) -> f64 {
+        self.plan.extend(x, self.map_at(x, y))
+    }
+
+    /// Height at a heading-frame point \[m\] as [`Ground::at`] with `ground_ahead`,
+    /// with or without it (under the head, `head_clear`; a swing's landing point,
+    /// `swing_ahead`).
+    fn with_plan(&self, x: f64, y: f64) -> f64 {
+        self.beyond.extend(x, self.map_at(x, y))
+    }
+
+    /// Bilinear in the map, clamped to its extent \[m\].
+    fn map_at(&self, x: f64, y: f64) -> f64 {
         let half = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
         let last = (LOCAL_MAP_SIDE - 1) as f64;
         let r = (x / LOCAL_MAP_SPACING + half).clamp(0.0, last);
@@ -603,9 +642,8 @@ impl<'a> Ground<'a> {
         let (r0, c0) = (r.floor().min(last - 1.0), c.floor().min(last - 1.0));
         let (fr, fc) = (r - r0, c - c0);
         let h = |i: f64, j: f64| self.map[i as usize * LOCAL_MAP_SIDE + j as usize];
-        let edge = (1.0 - fr) * ((1.0 - fc) * h(r0, c0) + fc * h(r0, c0 + 1.0))
-            + fr * ((1.0 - fc) * h(r0 + 1.0, c0) + fc * h(r0 + 1.0, c0 + 1.0));
-        self.plan.extend(x, edge)
+        (1.0 - fr) * ((1.0 - fc) * h(r0, c0) + fc * h(r0, c0 + 1.0))
+            + fr * ((1.0 - fc) * h(r0 + 1.0, c0) + fc * h(r0 + 1.0, c0 + 1.0))
     }
 }
 
@@ -671,6 +709,10 @@ pub(crate) struct CrawlGait {
 /// `slope_pitch`) \[s\]: a hand crossing a stair's nose changes the slope between
 /// knees and hands at once; the trunk follows over a stride.
 const SLOPE_FILTER: f64 = 0.3;
+
+/// Largest drop of the hands' targets for a sinking head (`head_push`) \[m\]: the
+/// arms are straight a little beyond it.
+const MAX_HEAD_PUSH: f64 = 0.1;
 
 /// Heading error below which a crawl that has just got down faces its plan \[rad\].
 const ALIGNED: f64 = 0.3;
@@ -798,7 +840,15 @@ impl CrawlGait {
             let s = shoulder[side];
             under += ground.at(s[0] + p.hand_fwd, s[1]);
         }
-        let pelvis_height = under / 4.0 + hip_height - hip[0][2];
+        let mut pelvis_height = under / 4.0 + hip_height - hip[0][2];
+        if p.head_clear > 0.0 {
+            // Over a tread ahead the head sinks towards it while the contacts' mean
+            // still reads the lower ground: the nominal head keeps `head_clear`.
+            let neck = add(spine, rot_y(torso_pitch, g.neck));
+            let head = add(neck, rot_y(torso_pitch + p.neck_pitch, HEAD_OFFSET));
+            let floor = ground.with_plan(head[0], head[1]) + p.head_clear - head[2];
+            pelvis_height = pelvis_height.max(floor);
+        }
         // The nominal hand seen from the torso decides the arm's IK branch.
         let hand = [
             p.hand_fwd,
@@ -1071,6 +1121,7 @@ impl CrawlGait {
                 self.phase = (self.phase + CONTROL_DT / cycle).fract();
                 let stance_time = cycle * duty;
                 let mut xy = [[0.0; 2]; LIMBS];
+                let mut land_xy = [[0.0; 2]; LIMBS];
                 let mut lift = [0.0; LIMBS];
                 for i in 0..LIMBS {
                     let local = (self.phase - p.offsets[i]).rem_euclid(1.0);
@@ -1094,6 +1145,7 @@ impl CrawlGait {
                                 + p.place_gain * (self.v_filt[k] - self.v_cmd[k]);
                             let l = self.lift_off[i][k];
                             *o = l + s * (land - l);
+                            land_xy[i][k] = nominal[i][k] + land;
                         }
                         let h = if i < 2 { p.knee_lift } else { p.hand_lift };
                         lift[i] = h * (PI * s_lin).sin();
@@ -1111,9 +1163,12 @@ impl CrawlGait {
                             nominal[i][0] + self.lift_off[i][0],
                             nominal[i][1] + self.lift_off[i][1],
                         ];
-                        let over = ground
+                        let mut over = ground
                             .at(x0, y0)
                             .max(contacts[i][2] - if i < 2 { KNEE_RADIUS } else { HAND_RADIUS });
+                        if p.swing_ahead {
+                            over = over.max(ground.with_plan(land_xy[i][0], land_xy[i][1]));
+                        }
                         contacts[i][2] = contacts[i][2].max(over) + lift[i];
                     }
                 }
@@ -1124,6 +1179,18 @@ impl CrawlGait {
                 for (c, n) in contacts.iter_mut().zip(&nominal) {
                     c[2] += p.attitude_gain * (roll * n[1] - pitch_err * n[0])
                         - p.height_gain_limbs * height_err;
+                }
+                if p.head_push > 0.0 {
+                    // The measured head sinking towards the ground under it: the
+                    // stance hands push the front up.
+                    let [hx, hy, hz] = obs.head_pos;
+                    let clear = obs.root_height + hz - ground.with_plan(hx, hy);
+                    let push = (p.head_push * (p.head_clear - clear)).clamp(0.0, MAX_HEAD_PUSH);
+                    for (c, swing) in contacts[2..].iter_mut().zip(&self.in_swing[2..]) {
+                        if !swing {
+                            c[2] -= push;
+                        }
+                    }
                 }
                 let load = 0.5 * p.hand_load * self.settings.body_mass * GRAVITY;
                 let hand_force = [2, 3].map(|i| if self.in_swing[i] { 0.0 } else { load });
@@ -1430,6 +1497,116 @@ mod tests {
             "up {up} (level {level})"
         );
         assert_eq!(pitch(on, false), level);
+    }
+
+    #[test]
+    fn the_head_clears_a_tread_ahead_only_with_head_clear() {
+        // Flat under the body (the map); the plan's ground beyond it flat (`tread` 0)
+        // or a tread 0.2 m up from the map's edge on.
+        let height = |params: CrawlParams, tread: f64| {
+            let mut obs = crawling_obs();
+            obs.head_pos = [0.6, 0.0, -0.15];
+            for i in 0..NUM_WAYPOINTS {
+                obs.waypoints[i] = [0.25 * i as f64 - 0.2, 0.0, 0.0];
+            }
+            obs.waypoint_ground = [tread; NUM_WAYPOINTS];
+            let gait = CrawlGait::new(params, ControllerSettings::default());
+            gait.frame(&Ground::new(&obs, params.ground_ahead))
+                .pelvis_height
+        };
+        let off = CrawlParams {
+            head_clear: 0.0,
+            head_push: 0.0,
+            ..CrawlParams::default()
+        };
+        let on = CrawlParams {
+            head_clear: 0.3,
+            ..off
+        };
+        let level = height(off, 0.0);
+        assert_eq!(height(off, 0.2), level);
+        // On level ground the nominal head is higher than 0.3 m: nothing changes.
+        assert_eq!(height(on, 0.0), level);
+        let up = height(on, 0.2);
+        // The tread reaches 0.1 m up under the nominal head (the plan's ground
+        // interpolated from the map's edge): the pelvis rises by 0.1 m less the
+        // nominal head's 0.05 m of spare clearance.
+        assert!(up > level + 0.03 && up < level + 0.08, "{up} vs {level}");
+    }
+
+    #[test]
+    fn the_hands_push_the_front_up_as_the_head_sinks_with_head_push() {
+        // One step from rest, the head `head_z` above level ground: the arms' joint
+        // targets with and without the push.
+        let arms = |params: CrawlParams, head_z: f64| {
+            let mut obs = crawling_obs();
+            obs.head_pos = [0.5, 0.0, head_z - obs.root_height];
+            for i in 0..NUM_WAYPOINTS {
+                obs.waypoints[i] = [0.25 * i as f64, 0.0, 0.0];
+            }
+            let mut gait = CrawlGait::new(params, ControllerSettings::default());
+            gait.reset();
+            let mut out = Action::default();
+            gait.act(&obs, &mut out);
+            let j = gait.joints;
+            [0, 1].map(|a| [out.pd_targets[j.shoulder[a][1]], out.pd_targets[j.elbow[a]]])
+        };
+        let off = CrawlParams {
+            head_clear: 0.3,
+            head_push: 0.0,
+            ..CrawlParams::default()
+        };
+        let on = CrawlParams {
+            head_push: 1.0,
+            ..off
+        };
+        assert_eq!(arms(on, 0.35), arms(off, 0.35));
+        assert_eq!(arms(off, 0.22), arms(off, 0.35));
+        let (low, high) = (arms(on, 0.22), arms(off, 0.22));
+        // The hands reach further down: the elbows straighten.
+        for a in 0..2 {
+            assert!(
+                low[a][1].abs() < high[a][1].abs() - 0.01,
+                "{low:?} vs {high:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_swinging_hand_clears_the_plans_tread_only_with_swing_ahead() {
+        // A second of crawling towards a plan 0.5 m/s ahead over a flat map; the plan's
+        // ground beyond the map flat or a tread 0.15 m up: the arms' targets per step.
+        let arms = |params: CrawlParams, tread: f64| {
+            let mut obs = crawling_obs();
+            obs.head_pos = [0.6, 0.0, -0.15];
+            for i in 0..NUM_WAYPOINTS {
+                obs.waypoints[i] = [0.25 * (i + 1) as f64, 0.0, 0.0];
+            }
+            obs.waypoint_speeds = [0.5; NUM_WAYPOINTS];
+            obs.waypoint_ground = [tread; NUM_WAYPOINTS];
+            let mut gait = CrawlGait::new(params, ControllerSettings::default());
+            gait.reset();
+            let mut out = Action::default();
+            let j = gait.joints;
+            (0..(1.0 / CONTROL_DT) as usize)
+                .map(|_| {
+                    gait.act(&obs, &mut out);
+                    [0, 1].map(|a| out.pd_targets[j.elbow[a]])
+                })
+                .collect::<Vec<_>>()
+        };
+        let off = CrawlParams {
+            swing_ahead: false,
+            ground_ahead: false,
+            ..CrawlParams::default()
+        };
+        let on = CrawlParams {
+            swing_ahead: true,
+            ..off
+        };
+        assert_eq!(arms(on, 0.0), arms(off, 0.0));
+        assert_eq!(arms(off, 0.15), arms(off, 0.0));
+        assert_ne!(arms(on, 0.15), arms(off, 0.15));
     }
 
     #[test]
