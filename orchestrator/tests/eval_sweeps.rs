@@ -81,11 +81,7 @@ fn check_sweep<E: Experiment>(e: &E, expect: &[&str]) {
         assert!(names.contains(f), "{}: {f} missing from {names:?}", E::NAME);
     }
     // Everything parses: the run table has one row per job, the summary is a table.
-    let runs = Table::parse(
-        &String::from_utf8(std::fs::read(one.join("runs.csv")).unwrap()).unwrap(),
-        "runs",
-    )
-    .unwrap();
+    let runs = read_runs(&one);
     assert_eq!(runs.rows.len(), e.jobs().unwrap().len());
     let summary = std::fs::read_to_string(one.join("summary.csv")).unwrap();
     assert!(Table::parse(&summary, "summary").unwrap().rows.len() >= 2);
@@ -266,17 +262,9 @@ fn a_random_tour_replays_with_plamo_run() {
             ..opts(&out, 1, Shard::ALL)
         };
         eval::run(&RandomScenes::new(1, 11).unwrap(), &o).unwrap();
-        let runs = Table::parse(
-            &std::fs::read_to_string(out.join("runs.csv")).unwrap(),
-            "runs",
-        )
-        .unwrap();
+        let runs = read_runs(&out);
         let digest = runs.str(0, "digest").unwrap().to_string();
-        let md = std::fs::read_to_string(out.join("random.md")).unwrap();
-        let line = md
-            .lines()
-            .find(|l| l.starts_with("plamo run --scene random-11 "))
-            .unwrap_or_else(|| panic!("no replay command in\n{md}"));
+        let line = replay_line(&out, "random.md", "plamo run --scene random-11 ");
         for (flag, given) in [
             ("--planner-params", o.planner.is_some()),
             ("--gait-params", o.controller.gait.is_some()),
@@ -285,21 +273,7 @@ fn a_random_tour_replays_with_plamo_run() {
             assert_eq!(line.contains(flag), given, "{flag}: {line}");
         }
         let dir = tmp(&format!("{name}-run"));
-        let cmd = format!(
-            "{} --quiet --out {}",
-            line.replacen("plamo", env!("CARGO_BIN_EXE_plamo"), 1)
-                .split(" --out ")
-                .next()
-                .unwrap(),
-            dir.display()
-        );
-        let o = Command::new("sh").args(["-c", &cmd]).output().unwrap();
-        let text = String::from_utf8_lossy(&o.stdout);
-        assert!(
-            text.contains(&format!("trajectory digest {digest}")),
-            "{cmd}\n{text}\n{}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        assert_replays(&line, None, &dir, &digest);
         digests.push(digest);
     }
     assert_ne!(digests[0], digests[1], "the planner file changed nothing");
@@ -321,32 +295,47 @@ fn a_dynamic_run_replays_with_plamo_run() {
         ..opts(&out, 1, Shard::ALL)
     };
     eval::run(&Dynamic::new(1, 3).unwrap(), &o).unwrap();
-    let runs = Table::parse(
-        &std::fs::read_to_string(out.join("runs.csv")).unwrap(),
-        "runs",
-    )
-    .unwrap();
+    let runs = read_runs(&out);
     let row = (0..runs.rows.len())
         .find(|&r| runs.flag(r, "replanning").unwrap())
         .unwrap();
     let digest = runs.str(row, "digest").unwrap().to_string();
-    let md = std::fs::read_to_string(out.join("dynamic.md")).unwrap();
-    let line = md
-        .lines()
-        .find(|l| l.starts_with("plamo run --scene crossing-3.toml "))
-        .unwrap_or_else(|| panic!("no replay command in\n{md}"));
+    let line = replay_line(&out, "dynamic.md", "plamo run --scene crossing-3.toml ");
     let planner = std::fs::read_to_string(out.join("planner-replanning.toml")).unwrap();
     for field in ["walk_speed = 1.5", "obstacle_margin = 0.35"] {
         assert!(planner.contains(field), "{field} not in\n{planner}");
     }
-    let cmd = format!(
-        "cd {} && {} --quiet --out replayed",
-        out.display(),
-        line.replacen("plamo", env!("CARGO_BIN_EXE_plamo"), 1)
-            .split(" --out ")
-            .next()
-            .unwrap(),
-    );
+    assert_replays(&line, Some(&out), &out.join("replayed"), &digest);
+}
+
+fn read_runs(out: &Path) -> Table {
+    Table::parse(
+        &std::fs::read_to_string(out.join("runs.csv")).unwrap(),
+        "runs",
+    )
+    .unwrap()
+}
+
+/// The line of `out`'s summary `md` that starts with `start` (a replay command).
+fn replay_line(out: &Path, md: &str, start: &str) -> String {
+    let text = std::fs::read_to_string(out.join(md)).unwrap();
+    text.lines()
+        .find(|l| l.starts_with(start))
+        .unwrap_or_else(|| panic!("no replay command in\n{text}"))
+        .to_string()
+}
+
+/// Run a summary's replay command as written (in `cwd`, if given), writing to `dir`
+/// instead of its `--out`, and check it prints the eval's trajectory `digest`.
+fn assert_replays(line: &str, cwd: Option<&Path>, dir: &Path, digest: &str) {
+    let run = line
+        .replacen("plamo", env!("CARGO_BIN_EXE_plamo"), 1)
+        .split(" --out ")
+        .next()
+        .unwrap()
+        .to_string();
+    let cd = cwd.map_or(String::new(), |d| format!("cd {} && ", d.display()));
+    let cmd = format!("{cd}{run} --quiet --out {}", dir.display());
     let o = Command::new("sh").args(["-c", &cmd]).output().unwrap();
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(
