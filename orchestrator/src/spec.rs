@@ -19,6 +19,17 @@ pub const SEED_YAW_JITTER: f64 = 0.05;
 /// Spacing of the rings searched for a start where a standing body fits \[m\].
 const START_SEARCH_STEP: f64 = 0.1;
 
+/// Default simulated-time limit of a run (`plamo run` and every eval): this many
+/// times the planned route time...
+pub const TIME_LIMIT_FACTOR: f64 = 2.0;
+/// ... plus this much \[s\].
+pub const TIME_LIMIT_EXTRA: f64 = 15.0;
+
+/// The default simulated-time limit for routes planned to take `route_time` \[s\].
+pub fn default_time_limit(route_time: f64) -> f64 {
+    TIME_LIMIT_FACTOR * route_time + TIME_LIMIT_EXTRA
+}
+
 /// Everything that decides a run's result.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunSpec {

@@ -121,7 +121,8 @@ pub struct RunArgs {
     /// Pace the simulation to the wall clock (only sleeps; results are unchanged).
     #[arg(long)]
     realtime: bool,
-    /// Simulated-time limit [s] (default: 3 x the planned route time + 20 s).
+    /// Simulated-time limit [s] (default: 2 x the planned route time + 15 s, as in the
+    /// evals).
     #[arg(long)]
     max_seconds: Option<f64>,
     /// Run id (isolates the run's shared memory); default: generated from pid and time.
@@ -209,7 +210,9 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         .iter()
         .filter_map(|p| p.planner().route().last().map(|t| t.end_time()))
         .fold(0.0, f64::max);
-    let max_seconds = args.max_seconds.unwrap_or(3.0 * route_time + 20.0);
+    let max_seconds = args
+        .max_seconds
+        .unwrap_or_else(|| plamo::spec::default_time_limit(route_time));
     let counts: Vec<usize> = planners
         .iter()
         .map(|p| p.planner().instructions().len())

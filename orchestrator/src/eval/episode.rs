@@ -16,7 +16,7 @@ use plamo_scenes::{ObstacleShape, Scene};
 
 use super::ground::{GroundKind, ground_kind};
 use crate::lockstep::{InProcess, Links, Lockstep, RunError, StepStatus};
-use crate::spec::{ControllerParams, RunSpec, controller_with};
+use crate::spec::{ControllerParams, RunSpec, controller_with, default_time_limit};
 
 /// Radius around a body's origin taken as its surface when checking contact with
 /// moving obstacles \[m\] (the humanoid's limb capsules are
@@ -26,10 +26,7 @@ pub const BODY_RADIUS: f64 = 0.1;
 /// Head track sampling period \[s\].
 const TRACK_DT: f64 = 0.5;
 
-/// Default simulated-time limit of a run: this many times the planned route time...
-pub const TIME_LIMIT_FACTOR: f64 = 2.0;
-/// ... plus this much \[s\].
-pub const TIME_LIMIT_EXTRA: f64 = 15.0;
+pub use crate::spec::{TIME_LIMIT_EXTRA, TIME_LIMIT_FACTOR};
 
 /// What a run is.
 #[derive(Debug, Clone)]
@@ -257,7 +254,7 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
     ep.planned_time = planner.route().last().map_or(0.0, |t| t.end_time());
     let max_seconds = spec
         .max_seconds
-        .unwrap_or(TIME_LIMIT_FACTOR * ep.planned_time + TIME_LIMIT_EXTRA);
+        .unwrap_or_else(|| default_time_limit(ep.planned_time));
     let scene = spec.scene;
     let links = Links {
         physics: Box::new(InProcess::new("physics", run.physics(scene)?)),
