@@ -264,7 +264,8 @@ fn menger(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 /// terrain\]. A top low enough to crawl under (head below `crawl_switch_height`)
 /// counts from `crawl_body_length` away: the get-down (a squat, hands reaching
 /// ahead) must be over before the body reaches the top, or the head and shoulders
-/// hit its edge.
+/// hit its edge. With `crawl_reach_along_path` that distance is left to [`annotate`],
+/// which measures it along the path.
 pub(crate) fn head_limit(scene: &Scene, s: &PlannerSettings, x: f64, y: f64, ground: f64) -> f64 {
     scene
         .tops
@@ -280,7 +281,7 @@ pub(crate) fn head_limit(scene: &Scene, s: &PlannerSettings, x: f64, y: f64, gro
             } else {
                 (headroom - s.head_margin).min(s.crawl_height)
             };
-            let reach = if lim < s.crawl_switch_height {
+            let reach = if lim < s.crawl_switch_height && !s.crawl_reach_along_path {
                 s.crawl_body_length.max(s.character_radius)
             } else {
                 s.character_radius
@@ -345,6 +346,9 @@ pub(crate) fn annotate(
     for p in out.iter_mut() {
         p.head_height = want.min(head_limit(scene, s, p.x, p.y, p.ground));
     }
+    if s.crawl_reach_along_path {
+        crawl_along_path(s, &mut out);
+    }
     for i in 1..n {
         let lim = out[i - 1].head_height + s.head_height_rate * (out[i].s - out[i - 1].s);
         out[i].head_height = out[i].head_height.min(lim);
@@ -387,6 +391,31 @@ pub(crate) fn annotate(
         }
     }
     out
+}
+
+/// A crawl under a top starts `crawl_body_length` of path before the head reaches it
+/// (the get-down is over before the body gets there) and lasts that long after the
+/// head leaves it (the body trails the head): each point takes the lowest crawl limit
+/// within that arc length. A path that only passes near a low top, or ends at a
+/// landmark beside one, keeps its form.
+fn crawl_along_path(s: &PlannerSettings, out: &mut [PathPoint]) {
+    let crawls: Vec<(f64, f64)> = out
+        .iter()
+        .filter(|p| p.head_height < s.crawl_switch_height)
+        .map(|p| (p.s, p.head_height))
+        .collect();
+    if crawls.is_empty() {
+        return;
+    }
+    for p in out.iter_mut() {
+        let lo = crawls.partition_point(|c| c.0 < p.s - s.crawl_body_length);
+        for &(_, h) in crawls[lo..]
+            .iter()
+            .take_while(|c| c.0 <= p.s + s.crawl_body_length)
+        {
+            p.head_height = p.head_height.min(h);
+        }
+    }
 }
 
 /// Refine an A* path into uniformly spaced, annotated points. `start` replaces the

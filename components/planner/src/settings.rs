@@ -113,6 +113,12 @@ pub struct PlannerSettings {
     /// seeds 0-199 and 101 -> 103 on seeds 200-399, falls 367 -> 309 over the 400
     /// (RESULTS.md, session 10). Default 4.
     pub crawl_zone_cost: f64,
+    /// Where a crawl under a low top begins and ends (not in the paper): false, every
+    /// path point within `crawl_body_length` of such a top crawls, so a walk that
+    /// passes beside one, or ends at a landmark next to one, crawls there too; true,
+    /// only points within `crawl_body_length` along the path of one under the top's
+    /// edge (within `character_radius`). Default false.
+    pub crawl_reach_along_path: bool,
     /// Cost of crouching under a top on a walk, run or sprint leg (not in the
     /// paper) \[1\]: each metre of such a leg within `character_radius` of a top
     /// that leaves no room to stand (below `stand_height` + `stoop_margin`), and a
@@ -242,6 +248,7 @@ impl Default for PlannerSettings {
             crawl_turn_rate: 0.5,
             crawl_relief_cost: 20.0,
             crawl_zone_cost: 4.0,
+            crawl_reach_along_path: false,
             stoop_zone_cost: 1.0,
             walk_speed: 2.0,
             run_speed: 4.0,

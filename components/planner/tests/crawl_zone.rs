@@ -167,3 +167,68 @@ fn the_crawl_zone_is_every_low_cells_disc() {
     assert!(want.iter().filter(|&&z| z).count() > 1000);
     assert!(g.crawl_zone == want);
 }
+
+fn plan_along_path(scene: Scene, form: &str, along_path: bool) -> Trajectory {
+    let settings = PlannerSettings {
+        crawl_zone_cost: 0.0,
+        stoop_zone_cost: 0.0,
+        crawl_reach_along_path: along_path,
+        ..Default::default()
+    };
+    let p = Planner::new(
+        scene,
+        &format!("{form} from the west to the east"),
+        [3.0, 6.0],
+        settings,
+    )
+    .unwrap();
+    p.route()[0].clone()
+}
+
+#[test]
+fn with_crawl_reach_along_path_a_walk_ending_beside_a_low_top_stays_on_its_feet() {
+    // The shed moved beside the east landmark: its edge 0.9 m north of the landmark's
+    // centre, so the leg ends within a crawler's body length of it but never under it.
+    let mut scene = field(0.6, false);
+    scene.tops[0].footprint = Footprint::axis_aligned([21.0, 7.4], [1.5, 0.5]);
+    let near = plan_along_path(scene.clone(), "walk", false);
+    assert!(
+        lowest_head(&near) < 0.6,
+        "measured from the top, the walk crawls beside it: lowest head {:.2} m",
+        lowest_head(&near)
+    );
+    let along = plan_along_path(scene, "walk", true);
+    assert!(
+        lowest_head(&along) > 1.4,
+        "measured along the path, it walks to the end: lowest head {:.2} m",
+        lowest_head(&along)
+    );
+}
+
+#[test]
+fn with_crawl_reach_along_path_the_head_is_down_a_body_length_before_the_top() {
+    // Fenced: the walk must pass under the shed (x 10.5-13.5).
+    let t = plan_along_path(field(0.6, true), "walk", true);
+    let s = PlannerSettings::default();
+    let edge = t
+        .points
+        .iter()
+        .find(|p| p.x >= 10.5 - s.character_radius)
+        .unwrap()
+        .s;
+    let before: Vec<_> = t
+        .points
+        .iter()
+        .filter(|p| p.s >= edge - s.crawl_body_length + 0.05 && p.s <= edge)
+        .collect();
+    assert!(!before.is_empty());
+    for p in before {
+        assert!(
+            p.head_height < s.crawl_switch_height,
+            "{:.2} m before the top's edge the head is at {:.2} m",
+            edge - p.s,
+            p.head_height
+        );
+    }
+    assert!(lowest_head(&t) < 0.6);
+}
