@@ -25,7 +25,10 @@
 //!   the desired pelvis height follows the mean ground under the contacts (the
 //!   pitch, with `slope_pitch`, the ground's rise); where the map is stepped or bumpy
 //!   (stairs, gravel: `rough_step`) the top speed may fall to `rough_speed` (these
-//!   three off in the shipped file).
+//!   three off in the shipped file). A swinging limb clears the plan's ground at its
+//!   landing point too (`swing_ahead`), and the head keeps `head_clear` over the
+//!   ground under it: the body rises, the stance hands push (`head_push`) (all three
+//!   on in the shipped file).
 //! - Getting down and up are joint-space blends over a fixed time from the joint
 //!   angles at the switch to the crawl's (or standing) pose, with the residual
 //!   wrench holding height rate and attitude.
@@ -1595,9 +1598,12 @@ mod tests {
                 })
                 .collect::<Vec<_>>()
         };
+        // The head's clearance would also read the plan's tread: left out here.
         let off = CrawlParams {
             swing_ahead: false,
             ground_ahead: false,
+            head_clear: 0.0,
+            head_push: 0.0,
             ..CrawlParams::default()
         };
         let on = CrawlParams {
