@@ -217,14 +217,17 @@ fn bad_arguments_are_refused_by_name() {
     .unwrap();
     let gait = dir.join("gait.toml");
     std::fs::write(&gait, plamo_controller::DEFAULT_GAIT_PARAMS).unwrap();
-    for (flag, file, needle) in [
-        ("--crawl-params", &fast, "max_speed"),
-        ("--crawl-params", &gait, "unknown field"),
-    ] {
-        let (ok, err) = plamo(&["eval", "random", flag, file.to_str().unwrap()]);
-        assert!(!ok, "{flag} {} succeeded", file.display());
-        for n in [needle, "crawl parameter file", file.to_str().unwrap()] {
-            assert!(err.contains(n), "`{n}` not in {err}");
+    // The same files for the sweeps and for the Table 2 protocol.
+    for eval in ["random", "locomotion"] {
+        for (flag, file, needle) in [
+            ("--crawl-params", &fast, "max_speed"),
+            ("--crawl-params", &gait, "unknown field"),
+        ] {
+            let (ok, err) = plamo(&["eval", eval, flag, file.to_str().unwrap()]);
+            assert!(!ok, "{eval} {flag} {} succeeded", file.display());
+            for n in [needle, "crawl parameter file", file.to_str().unwrap()] {
+                assert!(err.contains(n), "{eval}: `{n}` not in {err}");
+            }
         }
     }
 }

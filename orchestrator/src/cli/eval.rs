@@ -18,10 +18,11 @@ use plamo::eval::random::RandomScenes;
 use plamo::eval::slalom::{self, QpConfig, Slalom};
 use plamo::eval::{self, Experiment, RunOptions, Shard};
 use plamo::progress::Progress;
+use plamo::spec::ControllerParams;
 use plamo::viz::{FAMILY, ensure_registered};
 use plamo_controller::{
-    ControllerSettings, GaitParams, MetricsSummary, ModelBasedController, RUN_STAGGER, RampedPath,
-    START_ACCEL, STRIP_LENGTH, StraightPath, run_path, staggered_start, terrain_scene,
+    ControllerSettings, MetricsSummary, ModelBasedController, RUN_STAGGER, RampedPath, START_ACCEL,
+    STRIP_LENGTH, StraightPath, run_path, staggered_start, terrain_scene,
 };
 use plamo_physics::BackendKind;
 use plamo_scenes::Scene;
@@ -89,11 +90,9 @@ impl SweepArgs {
             .map(plamo::spec::load_planner_settings)
             .transpose()
             .map_err(anyhow::Error::msg)?;
-        let controller = plamo::spec::ControllerParams::load(
-            self.gait_params.as_deref(),
-            self.crawl_params.as_deref(),
-        )
-        .map_err(anyhow::Error::msg)?;
+        let controller =
+            ControllerParams::load(self.gait_params.as_deref(), self.crawl_params.as_deref())
+                .map_err(anyhow::Error::msg)?;
         Ok(RunOptions {
             physics: self.physics,
             out: self
@@ -206,9 +205,13 @@ pub struct LocomotionArgs {
     /// Longest simulated time per run [s].
     #[arg(long, default_value_t = 10.0)]
     duration: f64,
-    /// Gait parameter file (default: built in).
+    /// Biped gait parameter file, e.g. from `plamo tune` (default: the built-in one).
+    #[arg(long, visible_alias = "params")]
+    gait_params: Option<PathBuf>,
+    /// Crawl parameter file, e.g. from `plamo tune --form crawl` (default: the built-in
+    /// one).
     #[arg(long)]
-    params: Option<PathBuf>,
+    crawl_params: Option<PathBuf>,
     /// Output directory (created).
     #[arg(long, default_value = "eval-locomotion")]
     out: PathBuf,
@@ -273,10 +276,8 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
         .physics
         .parse()
         .map_err(|e| anyhow::anyhow!("--physics: {e}"))?;
-    let params = match &a.params {
-        Some(p) => GaitParams::load(p)?,
-        None => GaitParams::default(),
-    };
+    let params = ControllerParams::load(a.gait_params.as_deref(), a.crawl_params.as_deref())
+        .map_err(anyhow::Error::msg)?;
     let settings = ControllerSettings {
         body_mass: plamo_physics::humanoid::total_mass(),
         ..Default::default()
@@ -311,7 +312,11 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
             let duration = a
                 .duration
                 .min((STRIP_LENGTH - RUN_STAGGER * r as f64) / speed);
-            let mut policy = ModelBasedController::with_params(params, settings.clone())?;
+            let mut policy = ModelBasedController::with_all_params(
+                params.gait.unwrap_or_default(),
+                params.crawl.unwrap_or_default(),
+                settings.clone(),
+            )?;
             let m = run_path(backend, scene, &path, duration, &mut policy, &settings)?;
             bar.inc(1);
             Ok(m)
@@ -345,11 +350,20 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
 
 fn markdown(cells: &[[Cell; 4]; 4], a: &LocomotionArgs) -> String {
     let mut s = format!(
-        "Command: `plamo eval locomotion --physics {} --runs {} --duration {}`\n\n\
+        "Command: `plamo eval locomotion --physics {} --runs {} --duration {}{}`\n\n\
          Paths start from rest at {START_ACCEL} m/s^2, then keep the form's speed.\n\n\
          Mean head XY-err / Z-err [m], ours (paper Table 2 in brackets).\n\n\
          | terrain | crawl 0.4 m @ 1 | crouch-walk 0.8 m @ 2 | walk 1.47 m @ 2 | run 1.47 m @ 4 |\n|---|---|---|---|---|\n",
-        a.physics, a.runs, a.duration
+        a.physics,
+        a.runs,
+        a.duration,
+        [
+            ("--gait-params", &a.gait_params),
+            ("--crawl-params", &a.crawl_params)
+        ]
+        .iter()
+        .filter_map(|(flag, p)| p.as_ref().map(|p| format!(" {flag} {}", p.display())))
+        .collect::<String>()
     );
     for (t, row) in cells.iter().enumerate() {
         s.push_str(&format!("| {} |", TERRAINS[t]));
