@@ -117,7 +117,10 @@ pub struct PlannerSettings {
     /// path point within `crawl_body_length` of such a top crawls, so a walk that
     /// passes beside one, or ends at a landmark next to one, crawls there too; true,
     /// only points within `crawl_body_length` along the path of one under the top's
-    /// edge (within `character_radius`). Default false.
+    /// edge (within `character_radius`). 41 of the 600 legs of 200 random tours are
+    /// walks, runs or crouch-walks that crawled beside a top; with true, MuJoCo tours
+    /// 227 -> 247 of 400 succeed (seeds 0-399), falls 279 -> 233, rapier 7 -> 9 of 40.
+    /// Default true.
     pub crawl_reach_along_path: bool,
     /// Cost of crouching under a top on a walk, run or sprint leg (not in the
     /// paper) \[1\]: each metre of such a leg within `character_radius` of a top
@@ -248,7 +251,7 @@ impl Default for PlannerSettings {
             crawl_turn_rate: 0.5,
             crawl_relief_cost: 20.0,
             crawl_zone_cost: 4.0,
-            crawl_reach_along_path: false,
+            crawl_reach_along_path: true,
             stoop_zone_cost: 1.0,
             walk_speed: 2.0,
             run_speed: 4.0,
