@@ -41,8 +41,8 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
 use plamo_interfaces::CONTROL_DT;
-use plamo_physics::humanoid::{body_index, joint_index, BODIES, HEAD_OFFSET, JOINTS};
 use plamo_physics::NUM_JOINTS;
+use plamo_physics::humanoid::{BODIES, HEAD_OFFSET, JOINTS, body_index, joint_index};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
 use super::map_plane::MapPlane;
