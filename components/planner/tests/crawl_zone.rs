@@ -49,6 +49,11 @@ fn plan(scene: Scene, form: &str, zone_cost: f64) -> Trajectory {
         stoop_zone_cost: zone_cost,
         ..Default::default()
     };
+    plan_with(scene, form, settings)
+}
+
+/// The leg from west to east in `form` with `settings`.
+fn plan_with(scene: Scene, form: &str, settings: PlannerSettings) -> Trajectory {
     let p = Planner::new(
         scene,
         &format!("{form} from the west to the east"),
@@ -175,14 +180,7 @@ fn plan_along_path(scene: Scene, form: &str, along_path: bool) -> Trajectory {
         crawl_reach_along_path: along_path,
         ..Default::default()
     };
-    let p = Planner::new(
-        scene,
-        &format!("{form} from the west to the east"),
-        [3.0, 6.0],
-        settings,
-    )
-    .unwrap();
-    p.route()[0].clone()
+    plan_with(scene, form, settings)
 }
 
 #[test]
