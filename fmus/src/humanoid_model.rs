@@ -307,7 +307,7 @@ pub fn outputs(ls: &Lockstep, finished: bool, instruction_count: usize) -> Vec<V
     out.push(Value::Integer(instruction_count as i32));
     out.push(Value::Real(plan.progress));
     out.push(Value::Boolean(done));
-    out.push(Value::Boolean(ls.fallen()[0]));
+    out.push(Value::Boolean(ls.fall_verdicts()[0]));
     out.push(Value::Real(ls.xy_error(0)));
     out
 }

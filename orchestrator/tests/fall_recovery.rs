@@ -236,3 +236,48 @@ fn a_reset_gives_the_same_run_in_process_and_as_processes() {
     );
     assert_eq!(a.digest, b.digest);
 }
+
+/// A start landmark wholly under the tunnel's ceiling: there is no room to stand, so
+/// the first control step puts the body on hands and knees (the fall reset's
+/// placement) instead of leaving it standing through the ceiling, and it crawls out
+/// without a fall being counted. Before, it stood with the slab through its torso and
+/// never got going (random-100: 88 s, a timeout).
+#[test]
+fn a_start_under_a_low_ceiling_begins_on_hands_and_knees_without_a_fall() {
+    let mut f = tempfile::Builder::new()
+        .prefix("plamo-fall-boxed-in-")
+        .suffix(".toml")
+        .tempfile()
+        .unwrap();
+    f.write_all(
+        TUNNEL
+            .replace(
+                "center = [2.0, 3.0], radius = 0.5",
+                "center = [6.0, 3.0], radius = 0.5",
+            )
+            .as_bytes(),
+    )
+    .unwrap();
+    let spec = spec(f.path(), backend());
+    let scene = spec.load_scene().unwrap();
+    let links = spec.in_process(&scene).unwrap();
+    let mut ls = Lockstep::start(links, scene, &[1], &ControllerSettings::default(), 8.0).unwrap();
+    let x0 = ls.world().agents[0].root_position[0];
+    let mut first = None;
+    let (mut falls, mut max_head) = (0, 0.0f64);
+    while ls.step().unwrap() == StepStatus::Running {
+        let a = ls.input().actions[0];
+        first.get_or_insert((a.command, a.reset.form));
+        falls += usize::from(ls.fall_verdicts()[0]);
+        let s = &ls.world().agents[0];
+        if s.root_position[0] < 9.5 {
+            max_head = max_head.max(s.head_position[2]);
+        }
+    }
+    assert_eq!(first, Some((ACTION_RESET, RESET_CRAWL)));
+    assert_eq!(falls, 0, "no fall counted");
+    assert!(max_head < 0.6, "head up to {max_head} m under the ceiling");
+    let x = ls.world().agents[0].root_position[0];
+    // Under the ceiling the crawl goes 0.1-0.2 m/s (MuJoCo).
+    assert!(x > x0 + 0.5, "crawled from x {x0:.2} to {x:.2}");
+}

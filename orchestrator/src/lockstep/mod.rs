@@ -164,7 +164,12 @@ impl Lockstep {
                 &self.input.actions[k],
             );
             self.fell[k] = fell;
-            self.fallen[k] = fell;
+            // A start with no room to stand (a landmark wholly under a low top: the
+            // body spawned standing through it) gets the fall reset's placement in
+            // the plan's form, without counting a fall.
+            let root = self.world.agents[k].root_position;
+            let boxed_in = tick == 0 && !stands_clear(&self.scene, root[0], root[1]);
+            self.fallen[k] = fell || boxed_in;
         }
         if self.trackers.iter().all(AgentTracker::done) {
             return Ok(StepStatus::Finished);
@@ -183,6 +188,14 @@ impl Lockstep {
             &mut self.input,
         )?;
         self.times.controllers.push(secs(t1));
+        if tick == 0 {
+            // The start's reset is no fall: a fall near the start is a first one.
+            for (r, &fell) in self.recovery.iter_mut().zip(&self.fell) {
+                if !fell {
+                    *r = recover::Recovery::default();
+                }
+            }
+        }
         let t2 = Instant::now();
         self.world = actuate::actuate(self.links.physics.as_mut(), &self.input)?;
         self.times.physics.push(secs(t2));
@@ -229,7 +242,8 @@ impl Lockstep {
     pub fn input(&self) -> &PhysicsInput {
         &self.input
     }
-    /// Which agents were found fallen at the last control step (and reset).
+    /// Which agents were reset at the last control step: found fallen, or at the
+    /// first step with no room to stand where they started.
     pub fn fallen(&self) -> &[bool] {
         &self.fallen
     }
