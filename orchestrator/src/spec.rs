@@ -118,7 +118,8 @@ pub fn load_planner_settings(path: &Path) -> Result<PlannerSettings, String> {
 /// to stand (a low top over it, a wall beside it) the nearest spot of the region
 /// that has, searched on rings [`START_SEARCH_STEP`] apart. A body spawned standing
 /// into a ceiling is thrown out of it by the physics at several m/s. The centre if
-/// no spot of the region fits.
+/// no spot of the region fits: the lockstep's first control step then puts the body
+/// in the plan's form there (on hands and knees under a low top).
 fn start_spot(scene: &Scene, region: &Region) -> [f64; 2] {
     let c = region.center();
     if stands_clear(scene, c[0], c[1]) {
