@@ -24,6 +24,7 @@ use super::random::Z95;
 use super::table::field;
 use super::{Experiment, Meta, RunOptions, Table, command_line, mean, wilson};
 use crate::seeds::unit;
+use crate::spec::default_time_limit;
 use crate::viz::{MapOverlay, OverlayPath, render_map};
 
 /// The instruction of every run.
@@ -189,7 +190,12 @@ fn replay_note(runs: &Table, meta: &Meta, out: &Path) -> anyhow::Result<String> 
     let Some(&first) = collided.first().or(replanned.first()) else {
         return Ok(String::new());
     };
-    for &r in collided.iter().chain([&first]) {
+    let scenes = if collided.is_empty() {
+        &replanned[..1]
+    } else {
+        &collided[..]
+    };
+    for &r in scenes {
         let seed: u64 = runs.str(r, "scene_seed")?.parse()?;
         std::fs::write(
             out.join(format!("crossing-{seed}.toml")),
@@ -201,7 +207,7 @@ fn replay_note(runs: &Table, meta: &Meta, out: &Path) -> anyhow::Result<String> 
     let seed = runs.str(first, "scene_seed")?;
     let limit = match meta.max_seconds {
         Some(m) => m,
-        None => TIME_LIMIT_FACTOR * runs.f64(first, "planned_time")? + TIME_LIMIT_EXTRA,
+        None => default_time_limit(runs.f64(first, "planned_time")?),
     };
     // The gait and crawl files as the sweep wrote them; the planner's is the one above.
     let others = Meta {

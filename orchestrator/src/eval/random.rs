@@ -21,6 +21,7 @@ use super::plot::{Bar, bars};
 use super::table::field;
 use super::{Experiment, Meta, RunOptions, Table, command_line, mean, wilson};
 use crate::seeds::splitmix;
+use crate::spec::default_time_limit;
 
 /// The four locomotion forms, as instruction verbs.
 pub const FORMS: [&str; 4] = ["crawl", "crouch-walk", "walk", "run"];
@@ -98,7 +99,7 @@ fn replay_note(runs: &Table, meta: &Meta, out: &Path) -> anyhow::Result<String> 
     let seed = runs.str(r, "scene_seed")?;
     let limit = match meta.max_seconds {
         Some(m) => m,
-        None => TIME_LIMIT_FACTOR * runs.f64(r, "planned_time")? + TIME_LIMIT_EXTRA,
+        None => default_time_limit(runs.f64(r, "planned_time")?),
     };
     let params = meta.param_flags(out);
     Ok(format!(
