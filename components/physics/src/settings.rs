@@ -4,10 +4,16 @@ use crate::PhysicsError;
 
 /// Settings shared by both backends. Every field documents its unit and default;
 /// [`PhysicsSettings::validate`] checks ranges (called by [`crate::create_backend`]).
-#[derive(Debug, Clone, PartialEq)]
+///
+/// Deserializes from a TOML table naming only the fields to change (`plamo run
+/// --physics-params`); unknown fields are refused. `humanoids` is not read from a
+/// file: the physics component sets it from the agents' placements.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct PhysicsSettings {
     /// Number of humanoids in the world (default 1). Humanoids collide with the
     /// scene but not with each other (batched rollouts share one world).
+    #[serde(skip)]
     pub humanoids: usize,
     /// Gravity magnitude along -Z \[m/s^2\] (default 9.81).
     pub gravity: f64,
