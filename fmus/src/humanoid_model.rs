@@ -36,7 +36,12 @@ pub const EXTERNAL_OBSTACLES: usize = 4;
 const MAX_SECONDS: f64 = 1.0e6;
 
 /// The parameter files the whole humanoid takes.
-const PARAM_FILES: [ParamFile; 3] = [ParamFile::Planner, ParamFile::Gait, ParamFile::Crawl];
+const PARAM_FILES: [ParamFile; 4] = [
+    ParamFile::Planner,
+    ParamFile::Gait,
+    ParamFile::Crawl,
+    ParamFile::Physics,
+];
 
 const OBSTACLE_FIELDS: [(&str, &str, &str); 6] = [
     ("x", "m", "centre x"),

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use plamo::spec::{ControllerParams, ParamFiles, load_planner_settings};
+use plamo::spec::{ControllerParams, ParamFiles, load_physics_settings, load_planner_settings};
 use plamo_planner::PlannerSettings;
 use plamo_scenes::Scene;
 
@@ -39,6 +39,8 @@ pub(crate) enum ParamFile {
     Gait,
     /// Crawl parameters (the `crawl.toml` layout).
     Crawl,
+    /// Physics settings (a TOML table of `PhysicsSettings` fields).
+    Physics,
 }
 
 impl ParamFile {
@@ -48,6 +50,7 @@ impl ParamFile {
             Self::Planner => "planner_params",
             Self::Gait => "gait_params",
             Self::Crawl => "crawl_params",
+            Self::Physics => "physics_params",
         }
     }
 
@@ -62,6 +65,9 @@ impl ParamFile {
             }
             Self::Crawl => {
                 "crawl parameter file, the crawl.toml layout with every field (as `plamo run --crawl-params`)"
+            }
+            Self::Physics => {
+                "physics parameter file: a TOML table of physics settings (friction, solver iterations, contact stiffness), the fields it leaves out keep their defaults (as `plamo run --physics-params`)"
             }
         };
         Variable::parameter(
@@ -137,6 +143,10 @@ pub(crate) fn param_files(
             ParamFile::Crawl => {
                 ControllerParams::load(None, Some(&path)).map_err(named)?;
                 files.crawl = Some(path);
+            }
+            ParamFile::Physics => {
+                load_physics_settings(&path).map_err(named)?;
+                files.physics = Some(path);
             }
         }
     }

@@ -1,5 +1,5 @@
-//! The FMUs' parameter files (`planner_params`, `gait_params`, `crawl_params`, as
-//! `plamo run --planner-params ...`): the humanoid FMU given them runs bit for bit as
+//! The FMUs' parameter files (`planner_params`, `gait_params`, `crawl_params`,
+//! `physics_params`, as `plamo run --planner-params ...`): the humanoid FMU given them runs bit for bit as
 //! the in-process lockstep given the same files, and not as with the built-in
 //! parameters; a file shipped in resources/ is found by its name; a bad or missing
 //! file fails initialisation with a message naming the parameter and what is wrong.
@@ -139,28 +139,36 @@ fn the_humanoid_fmu_with_parameter_files_runs_as_the_in_process_lockstep_given_t
     let crawl = dir.path().join("crawl.toml");
     std::fs::copy(params_dir().join("gait.toml"), &gait).unwrap();
     std::fs::copy(params_dir().join("crawl.toml"), &crawl).unwrap();
+    // Stiffer contacts than the default 11 Hz.
+    let physics = write(dir.path(), "stiff.toml", "rapier_contact_hz = 30.0\n");
     let files = ParamFiles {
         planner: Some(planner.clone()),
         gait: Some(gait.clone()),
         crawl: Some(crawl.clone()),
+        physics: Some(physics.clone()),
     };
-    let mut inst = start(
-        plamo_fmu::HUMANOID_GUID,
-        &[
-            ("planner_params", planner.to_str().unwrap()),
-            ("gait_params", gait.to_str().unwrap()),
-            ("crawl_params", crawl.to_str().unwrap()),
-        ],
-        &[],
-        None,
-    )
-    .unwrap();
+    let strings = [
+        ("planner_params", planner.to_str().unwrap()),
+        ("gait_params", gait.to_str().unwrap()),
+        ("crawl_params", crawl.to_str().unwrap()),
+        ("physics_params", physics.to_str().unwrap()),
+    ];
+    let mut inst = start(plamo_fmu::HUMANOID_GUID, &strings, &[], None).unwrap();
     let with_files = run(&mut inst, Some(route_lockstep_with(0, files)));
+    let mut soft = start(plamo_fmu::HUMANOID_GUID, &strings[..3], &[], None).unwrap();
+    assert_ne!(
+        run(&mut soft, None),
+        with_files,
+        "the physics file changed nothing"
+    );
 
     // Shipped in resources/ and named relative: the same run.
     let mut shipped = start(
         plamo_fmu::HUMANOID_GUID,
-        &[("planner_params", "slow.toml")],
+        &[
+            ("planner_params", "slow.toml"),
+            ("physics_params", "stiff.toml"),
+        ],
         &[],
         Some(dir.path().to_path_buf()),
     )
@@ -168,7 +176,7 @@ fn the_humanoid_fmu_with_parameter_files_runs_as_the_in_process_lockstep_given_t
     assert_eq!(
         run(&mut shipped, None),
         with_files,
-        "a planner file in resources/"
+        "planner and physics files in resources/"
     );
 
     let mut built_in = start(plamo_fmu::HUMANOID_GUID, &[], &[], None).unwrap();
@@ -193,6 +201,7 @@ fn a_bad_or_missing_parameter_file_names_the_parameter_and_the_problem() {
     gait.push_str("foot_fwd_gian = 0.1\n");
     let bad_gait = write(dir.path(), "bad-gait.toml", &gait);
     let not_crawl = write(dir.path(), "not-crawl.toml", "walk_speed = 0.6\n");
+    let bad_physics = write(dir.path(), "bad-physics.toml", "friction = -1.0\n");
     let cases = [
         (
             "planner_params",
@@ -208,6 +217,11 @@ fn a_bad_or_missing_parameter_file_names_the_parameter_and_the_problem() {
             "crawl_params",
             not_crawl.to_str().unwrap(),
             vec!["crawl_params", "walk_speed"],
+        ),
+        (
+            "physics_params",
+            bad_physics.to_str().unwrap(),
+            vec!["physics_params", "friction", ">= 0"],
         ),
         (
             "planner_params",

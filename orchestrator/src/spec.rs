@@ -56,6 +56,9 @@ pub struct ParamFiles {
     /// Planner parameters: a TOML table of [`PlannerSettings`] fields; fields it
     /// leaves out keep their defaults.
     pub planner: Option<PathBuf>,
+    /// Physics settings: a TOML table of [`PhysicsSettings`] fields; fields it leaves
+    /// out keep their defaults.
+    pub physics: Option<PathBuf>,
 }
 
 /// Controller parameters already read (a sweep reads its files once, then runs every
@@ -111,6 +114,21 @@ pub fn load_planner_settings(path: &Path) -> Result<PlannerSettings, String> {
     let text = std::fs::read_to_string(path).map_err(|e| named(&e))?;
     let settings: PlannerSettings = toml::from_str(&text).map_err(|e| named(&e))?;
     settings.validate().map_err(|e| named(&e))?;
+    Ok(settings)
+}
+
+/// The physics settings of a `--physics-params` file, checked against their ranges.
+pub fn load_physics_settings(path: &Path) -> Result<PhysicsSettings, String> {
+    let named =
+        |e: &dyn std::fmt::Display| format!("physics parameter file {}: {e}", path.display());
+    let text = std::fs::read_to_string(path).map_err(|e| named(&e))?;
+    let settings: PhysicsSettings = toml::from_str(&text).map_err(|e| named(&e))?;
+    PhysicsSettings {
+        humanoids: 1,
+        ..settings.clone()
+    }
+    .validate()
+    .map_err(|e| named(&e))?;
     Ok(settings)
 }
 
@@ -243,8 +261,26 @@ impl RunSpec {
         controller_with(scene, k, params)
     }
 
-    /// The physics world with every agent at its start.
+    /// The physics settings: the spec's file, or the defaults.
+    pub fn physics_settings(&self) -> Result<PhysicsSettings, RunError> {
+        match &self.params.physics {
+            Some(f) => load_physics_settings(f).map_err(RunError::Setup),
+            None => Ok(PhysicsSettings::default()),
+        }
+    }
+
+    /// The physics world with every agent at its start, with the spec's settings.
     pub fn physics(&self, scene: &Scene) -> Result<PhysicsComponent, RunError> {
+        self.physics_with(scene, &self.physics_settings()?)
+    }
+
+    /// The physics world with every agent at its start, with `settings` (a sweep
+    /// reads its file once).
+    pub fn physics_with(
+        &self,
+        scene: &Scene,
+        settings: &PhysicsSettings,
+    ) -> Result<PhysicsComponent, RunError> {
         let placements = (0..self.agents())
             .map(|k| self.placement(scene, k))
             .collect::<Result<Vec<_>, _>>()?;
@@ -255,13 +291,7 @@ impl RunSpec {
                 self.backend
             )));
         }
-        PhysicsComponent::new(
-            self.backend,
-            scene,
-            &PhysicsSettings::default(),
-            &placements,
-        )
-        .map_err(setup)
+        PhysicsComponent::new(self.backend, scene, settings, &placements).map_err(setup)
     }
 
     /// Every component in this process.
@@ -306,13 +336,14 @@ impl RunSpec {
                 .map_or("built-in".to_string(), |p| p.display().to_string())
         };
         format!(
-            "scene {scene}, physics {}, seed {}, {} agent(s), instructions #{h:016x}, gait {}, crawl {}, planner {}",
+            "scene {scene}, physics {}, seed {}, {} agent(s), instructions #{h:016x}, gait {}, crawl {}, planner {}, physics settings {}",
             self.backend,
             self.seed,
             self.agents(),
             file(&self.params.gait),
             file(&self.params.crawl),
-            file(&self.params.planner)
+            file(&self.params.planner),
+            file(&self.params.physics)
         )
     }
 
@@ -334,6 +365,7 @@ impl RunSpec {
             ("--gait-params", &self.params.gait),
             ("--crawl-params", &self.params.crawl),
             ("--planner-params", &self.params.planner),
+            ("--physics-params", &self.params.physics),
         ] {
             if let Some(f) = file {
                 a.push(flag.into());

@@ -14,7 +14,7 @@ use plamo::eval::random::RandomScenes;
 use plamo::eval::slalom::{QpConfig, Slalom};
 use plamo::eval::{self, ControllerParams, Experiment, RunOptions, Shard, Table};
 use plamo_controller::{CrawlParams, GaitParams};
-use plamo_physics::BackendKind;
+use plamo_physics::{BackendKind, PhysicsSettings};
 
 fn tmp(name: &str) -> support::OutDir {
     support::out_dir("eval", name)
@@ -30,6 +30,7 @@ fn opts(out: &Path, threads: usize, shard: Shard) -> RunOptions {
         quiet: true,
         planner: None,
         controller: Default::default(),
+        physics_settings: None,
     }
 }
 
@@ -229,12 +230,21 @@ fn bad_arguments_are_refused_by_name() {
                 assert!(err.contains(n), "{eval}: `{n}` not in {err}");
             }
         }
+        let (ok, err) = plamo(&["eval", eval, "--physics-params", gait.to_str().unwrap()]);
+        assert!(!ok, "{eval} --physics-params {} succeeded", gait.display());
+        for n in [
+            "physics parameter file",
+            "unknown field",
+            gait.to_str().unwrap(),
+        ] {
+            assert!(err.contains(n), "{eval}: `{n}` not in {err}");
+        }
     }
 }
 
 /// random.md's replay command, run as written, retraces the eval's tour bit for bit,
 /// with the built-in parameters, with a `--planner-params` file and with
-/// `--gait-params` and `--crawl-params` files.
+/// `--gait-params` and `--crawl-params` files, and with a `--physics-params` file.
 #[test]
 fn a_random_tour_replays_with_plamo_run() {
     // Twice the paper's a_max: the plan speeds up faster from the first step.
@@ -250,17 +260,34 @@ fn a_random_tour_replays_with_plamo_run() {
             ..Default::default()
         }),
     };
+    // Stiffer contacts than the default 11 Hz.
+    let stiff = PhysicsSettings {
+        rapier_contact_hz: 30.0,
+        ..Default::default()
+    };
     let mut digests = Vec::new();
-    for (name, planner, controller) in [
-        ("replay", None, ControllerParams::default()),
-        ("replay-brisk", Some(brisk), ControllerParams::default()),
-        ("replay-slow-crawl", None, slow_crawl),
+    for (name, planner, controller, physics_settings) in [
+        ("replay", None, ControllerParams::default(), None),
+        (
+            "replay-brisk",
+            Some(brisk),
+            ControllerParams::default(),
+            None,
+        ),
+        ("replay-slow-crawl", None, slow_crawl, None),
+        (
+            "replay-stiff",
+            None,
+            ControllerParams::default(),
+            Some(stiff),
+        ),
     ] {
         let out = tmp(name);
         // Past the get-down that starts this crawl tour, where the plans differ.
         let o = RunOptions {
             planner,
             controller,
+            physics_settings,
             max_seconds: Some(4.0),
             ..opts(&out, 1, Shard::ALL)
         };
@@ -272,6 +299,7 @@ fn a_random_tour_replays_with_plamo_run() {
             ("--planner-params", o.planner.is_some()),
             ("--gait-params", o.controller.gait.is_some()),
             ("--crawl-params", o.controller.crawl.is_some()),
+            ("--physics-params", o.physics_settings.is_some()),
         ] {
             assert_eq!(line.contains(flag), given, "{flag}: {line}");
         }
@@ -281,6 +309,7 @@ fn a_random_tour_replays_with_plamo_run() {
     }
     assert_ne!(digests[0], digests[1], "the planner file changed nothing");
     assert_ne!(digests[0], digests[2], "the crawl file changed nothing");
+    assert_ne!(digests[0], digests[3], "the physics file changed nothing");
 }
 
 /// dynamic.md's replay command, run in the eval's folder as written, retraces the

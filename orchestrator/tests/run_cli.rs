@@ -646,6 +646,45 @@ fn parameter_files_from_tune_drive_the_controller_in_both_modes() {
     }
 }
 
+#[test]
+fn a_physics_parameter_file_drives_the_physics_in_both_modes() {
+    let dir = out_dir("physics-params");
+    let file = dir.join("physics.toml");
+    // Stiffer feet and less grip than the defaults (11 Hz, 1.0).
+    std::fs::write(&file, "rapier_contact_hz = 30.0\nfriction = 0.8\n").unwrap();
+    let base = ["--instructions", ROUTE, "--max-seconds", "3", "--seed", "7"];
+    let mut args = base.to_vec();
+    args.extend(["--physics-params", file.to_str().unwrap()]);
+    let stiff = same_in_both_modes(&args, "cli-test-physics-params");
+    let built_in = run_ok(&base, &out_dir("physics-params-built-in"));
+    assert_ne!(
+        digest(&stiff),
+        digest(&built_in),
+        "the file changed nothing"
+    );
+    // A misspelt field, a value out of range, a file that is not there: each named.
+    let typo = dir.join("typo.toml");
+    std::fs::write(&typo, "frction = 0.8\n").unwrap();
+    let range = dir.join("range.toml");
+    std::fs::write(&range, "rapier_solver_iterations = 0\n").unwrap();
+    let missing = dir.join("missing.toml");
+    for (path, needle) in [
+        (&typo, "frction"),
+        (&range, "rapier_solver_iterations"),
+        (&missing, "missing.toml"),
+    ] {
+        let o = plamo(&["--instructions", ROUTE, "--max-seconds", "1"])
+            .args(["--physics-params", path.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{}", path.display());
+        for n in [needle, "physics parameter file", path.to_str().unwrap()] {
+            assert!(err.contains(n), "`{n}` not in {err}");
+        }
+    }
+}
+
 /// The fastest planned speed in a run's `plans.json` \[m/s\].
 fn planned_top_speed(out: &Path) -> f64 {
     recorded_json(out, "plans.json")["initial"][0]["route"]

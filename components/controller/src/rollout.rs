@@ -366,7 +366,21 @@ pub fn run_path(
     policy: &mut dyn Policy,
     settings: &ControllerSettings,
 ) -> Result<MetricsSummary> {
-    let mut physics = create_backend(backend, scene, &PhysicsSettings::default())?;
+    let physics = PhysicsSettings::default();
+    run_path_with(backend, &physics, scene, path, duration, policy, settings)
+}
+
+/// [`run_path`] with physics settings other than the defaults.
+pub fn run_path_with(
+    backend: BackendKind,
+    physics: &PhysicsSettings,
+    scene: &Scene,
+    path: &dyn HeadPath,
+    duration: f64,
+    policy: &mut dyn Policy,
+    settings: &ControllerSettings,
+) -> Result<MetricsSummary> {
+    let mut physics = create_backend(backend, scene, physics)?;
     let start = path.point(scene, 0.0);
     physics.reset(&HumanoidPose::standing_on(
         &scene.terrain,

@@ -8,7 +8,7 @@ use crate::PhysicsError;
 /// Deserializes from a TOML table naming only the fields to change (`plamo run
 /// --physics-params`); unknown fields are refused. `humanoids` is not read from a
 /// file: the physics component sets it from the agents' placements.
-#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PhysicsSettings {
     /// Number of humanoids in the world (default 1). Humanoids collide with the

@@ -22,9 +22,9 @@ use plamo::spec::ControllerParams;
 use plamo::viz::{FAMILY, ensure_registered};
 use plamo_controller::{
     ControllerSettings, MetricsSummary, ModelBasedController, RUN_STAGGER, RampedPath, START_ACCEL,
-    STRIP_LENGTH, StraightPath, run_path, staggered_start, terrain_scene,
+    STRIP_LENGTH, StraightPath, run_path_with, staggered_start, terrain_scene,
 };
-use plamo_physics::BackendKind;
+use plamo_physics::{BackendKind, PhysicsSettings};
 use plamo_scenes::Scene;
 use plotters::prelude::*;
 use rayon::prelude::*;
@@ -80,6 +80,10 @@ pub struct SweepArgs {
     /// built-in one).
     #[arg(long)]
     crawl_params: Option<PathBuf>,
+    /// Physics parameter file: a TOML table of physics settings (see
+    /// `PhysicsSettings`; fields left out keep their defaults).
+    #[arg(long)]
+    physics_params: Option<PathBuf>,
 }
 
 impl SweepArgs {
@@ -93,6 +97,12 @@ impl SweepArgs {
         let controller =
             ControllerParams::load(self.gait_params.as_deref(), self.crawl_params.as_deref())
                 .map_err(anyhow::Error::msg)?;
+        let physics_settings = self
+            .physics_params
+            .as_deref()
+            .map(plamo::spec::load_physics_settings)
+            .transpose()
+            .map_err(anyhow::Error::msg)?;
         Ok(RunOptions {
             physics: self.physics,
             out: self
@@ -105,6 +115,7 @@ impl SweepArgs {
             quiet: self.quiet,
             planner,
             controller,
+            physics_settings,
         })
     }
 }
@@ -212,6 +223,10 @@ pub struct LocomotionArgs {
     /// one).
     #[arg(long)]
     crawl_params: Option<PathBuf>,
+    /// Physics parameter file: a TOML table of physics settings (see
+    /// `PhysicsSettings`; fields left out keep their defaults).
+    #[arg(long)]
+    physics_params: Option<PathBuf>,
     /// Output directory (created).
     #[arg(long, default_value = "eval-locomotion")]
     out: PathBuf,
@@ -278,6 +293,10 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
         .map_err(|e| anyhow::anyhow!("--physics: {e}"))?;
     let params = ControllerParams::load(a.gait_params.as_deref(), a.crawl_params.as_deref())
         .map_err(anyhow::Error::msg)?;
+    let physics_settings = match &a.physics_params {
+        Some(f) => plamo::spec::load_physics_settings(f).map_err(anyhow::Error::msg)?,
+        None => PhysicsSettings::default(),
+    };
     let settings = ControllerSettings {
         body_mass: plamo_physics::humanoid::total_mass(),
         ..Default::default()
@@ -317,7 +336,15 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
                 params.crawl.unwrap_or_default(),
                 settings.clone(),
             )?;
-            let m = run_path(backend, scene, &path, duration, &mut policy, &settings)?;
+            let m = run_path_with(
+                backend,
+                &physics_settings,
+                scene,
+                &path,
+                duration,
+                &mut policy,
+                &settings,
+            )?;
             bar.inc(1);
             Ok(m)
         })
@@ -359,7 +386,8 @@ fn markdown(cells: &[[Cell; 4]; 4], a: &LocomotionArgs) -> String {
         a.duration,
         [
             ("--gait-params", &a.gait_params),
-            ("--crawl-params", &a.crawl_params)
+            ("--crawl-params", &a.crawl_params),
+            ("--physics-params", &a.physics_params)
         ]
         .iter()
         .filter_map(|(flag, p)| p.as_ref().map(|p| format!(" {flag} {}", p.display())))

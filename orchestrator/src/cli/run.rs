@@ -50,6 +50,11 @@ pub struct SpecArgs {
     /// `PlannerSettings`; fields left out keep their defaults).
     #[arg(long)]
     planner_params: Option<PathBuf>,
+    /// Physics parameter file: a TOML table of physics settings (see
+    /// `PhysicsSettings`: friction, solver iterations, contact stiffness...; fields
+    /// left out keep their defaults).
+    #[arg(long)]
+    physics_params: Option<PathBuf>,
 }
 
 impl SpecArgs {
@@ -70,6 +75,9 @@ impl SpecArgs {
         // A bad parameter file fails here, before any component process starts.
         if let Some(f) = &self.planner_params {
             plamo::spec::load_planner_settings(f).map_err(anyhow::Error::msg)?;
+        }
+        if let Some(f) = &self.physics_params {
+            plamo::spec::load_physics_settings(f).map_err(anyhow::Error::msg)?;
         }
         plamo::spec::ControllerParams::load(
             self.gait_params.as_deref(),
@@ -95,6 +103,11 @@ impl SpecArgs {
                     .transpose()?,
                 planner: self
                     .planner_params
+                    .as_deref()
+                    .map(std::path::absolute)
+                    .transpose()?,
+                physics: self
+                    .physics_params
                     .as_deref()
                     .map(std::path::absolute)
                     .transpose()?,

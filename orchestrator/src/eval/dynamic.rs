@@ -120,6 +120,7 @@ pub fn scene_file(seed: u64) -> anyhow::Result<SceneFile> {
         // The scene is the seed's alone: timed against the default plan.
         planner: settings(PlannerSettings::default(), true),
         controller: Default::default(),
+        physics_settings: Default::default(),
         max_seconds: None,
     };
     let (_, planner) = plan(&spec).map_err(anyhow::Error::msg)?;
@@ -288,6 +289,7 @@ impl Experiment for Dynamic {
             seed,
             planner: settings(opts.planner(), replan),
             controller: opts.controller,
+            physics_settings: opts.physics_settings(),
             max_seconds: opts.max_seconds,
         };
         // Planner only: would the start plan meet an obstacle anywhere along it?

@@ -8,7 +8,7 @@
 //! [`BODY_RADIUS`] of its surface (obstacles are kinematic: they push, never stop).
 
 use plamo_controller::ControllerSettings;
-use plamo_physics::BackendKind;
+use plamo_physics::{BackendKind, PhysicsSettings};
 use plamo_planner::{
     FLAG_INFEASIBLE, FLAG_REPLANNED, Locomotion, Planner, PlannerComponent, PlannerSettings,
 };
@@ -43,6 +43,8 @@ pub struct EpisodeSpec<'a> {
     pub planner: PlannerSettings,
     /// Controller parameters.
     pub controller: ControllerParams,
+    /// Physics settings.
+    pub physics_settings: PhysicsSettings,
     /// Simulated-time limit \[s\]; `None`: [`TIME_LIMIT_FACTOR`] x planned time +
     /// [`TIME_LIMIT_EXTRA`].
     pub max_seconds: Option<f64>,
@@ -257,7 +259,10 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
         .unwrap_or_else(|| default_time_limit(ep.planned_time));
     let scene = spec.scene;
     let links = Links {
-        physics: Box::new(InProcess::new("physics", run.physics(scene)?)),
+        physics: Box::new(InProcess::new(
+            "physics",
+            run.physics_with(scene, &spec.physics_settings)?,
+        )),
         planners: vec![Box::new(InProcess::new(
             "planner-0",
             PlannerComponent::new(planner, 0),
@@ -361,6 +366,7 @@ mod tests {
             seed: 0,
             planner: PlannerSettings::default(),
             controller: Default::default(),
+            physics_settings: Default::default(),
             // Long enough for the run to go over the flight and back onto it: 8 s
             // stopped falling there once rapier took 4 solver iterations.
             max_seconds: Some(16.0),

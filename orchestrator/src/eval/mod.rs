@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use plamo_controller::{CrawlParams, GaitParams};
-use plamo_physics::BackendKind;
+use plamo_physics::{BackendKind, PhysicsSettings};
 use plamo_planner::PlannerSettings;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -92,12 +92,19 @@ pub struct RunOptions {
     pub planner: Option<PlannerSettings>,
     /// Controller parameters of every run (`--gait-params`, `--crawl-params`).
     pub controller: ControllerParams,
+    /// Physics settings of every run (`--physics-params`); `None`: the defaults.
+    pub physics_settings: Option<PhysicsSettings>,
 }
 
 impl RunOptions {
     /// The planner settings every run starts from.
     pub fn planner(&self) -> PlannerSettings {
         self.planner.clone().unwrap_or_default()
+    }
+
+    /// The physics settings of every run.
+    pub fn physics_settings(&self) -> PhysicsSettings {
+        self.physics_settings.clone().unwrap_or_default()
     }
 }
 
@@ -109,6 +116,9 @@ pub const GAIT_FILE: &str = "gait.toml";
 /// The crawl parameters of a sweep run with `--crawl-params`, written next to
 /// `eval.json`.
 pub const CRAWL_FILE: &str = "crawl.toml";
+/// The physics settings of a sweep run with `--physics-params`, written next to
+/// `eval.json` (every field, defaults included).
+pub const PHYSICS_FILE: &str = "physics.toml";
 
 /// What every output folder says about the sweep that wrote it (`eval.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -135,6 +145,9 @@ pub struct Meta {
     /// Crawl parameters from `--crawl-params`, when given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub crawl: Option<CrawlParams>,
+    /// Physics settings from `--physics-params`, when given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physics_settings: Option<PhysicsSettings>,
 }
 
 impl Meta {
@@ -151,6 +164,11 @@ impl Meta {
         }
     }
 
+    /// The physics settings every run of the sweep used.
+    pub fn physics_settings(&self) -> PhysicsSettings {
+        self.physics_settings.clone().unwrap_or_default()
+    }
+
     /// The parameter files this sweep wrote next to `eval.json`, as command-line
     /// flags, each path `dir` joined with the file's name (`dir` empty: the bare
     /// names, for a command run in the folder).
@@ -159,6 +177,11 @@ impl Meta {
             ("--planner-params", PLANNER_FILE, self.planner.is_some()),
             ("--gait-params", GAIT_FILE, self.gait.is_some()),
             ("--crawl-params", CRAWL_FILE, self.crawl.is_some()),
+            (
+                "--physics-params",
+                PHYSICS_FILE,
+                self.physics_settings.is_some(),
+            ),
         ]
         .into_iter()
         .filter(|f| f.2)
@@ -249,6 +272,7 @@ pub fn run<E: Experiment>(e: &E, opts: &RunOptions) -> anyhow::Result<String> {
         planner: opts.planner.clone(),
         gait: opts.controller.gait,
         crawl: opts.controller.crawl,
+        physics_settings: opts.physics_settings.clone(),
     };
     write_folder(e, &meta, table, &opts.out)
 }
@@ -274,6 +298,9 @@ fn write_folder<E: Experiment>(
     }
     if let Some(p) = &meta.crawl {
         std::fs::write(out.join(CRAWL_FILE), toml::to_string(p)?)?;
+    }
+    if let Some(p) = &meta.physics_settings {
+        std::fs::write(out.join(PHYSICS_FILE), toml::to_string(p)?)?;
     }
     // The summary reads the rows back from their text, so a merged sweep (which only
     // has the text) summarizes exactly the same numbers.

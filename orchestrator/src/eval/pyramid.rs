@@ -112,6 +112,7 @@ impl Experiment for Pyramid {
             seed,
             planner: Self::settings(opts.planner(), c),
             controller: opts.controller,
+            physics_settings: opts.physics_settings(),
             max_seconds: opts.max_seconds,
         };
         let top = plan(&spec).map_or(f64::NAN, |(_, p)| {
@@ -249,6 +250,7 @@ impl Experiment for Pyramid {
                 seed: self.seed,
                 planner: Self::settings(meta.planner(), c),
                 controller: meta.controller(),
+                physics_settings: meta.physics_settings(),
                 max_seconds: None,
             };
             if let Ok((_, p)) = plan(&spec) {

@@ -231,6 +231,7 @@ impl Experiment for RandomScenes {
             seed: scene_seed,
             planner: opts.planner(),
             controller: opts.controller,
+            physics_settings: opts.physics_settings(),
             max_seconds: opts.max_seconds,
         })?;
         let finished = ep.reached == ep.instructions;

@@ -234,6 +234,7 @@ impl Slalom {
                 seed: self.seed,
                 planner: q.settings(meta.planner()),
                 controller: meta.controller(),
+                physics_settings: meta.physics_settings(),
                 max_seconds: None,
             };
             if let Ok((_, p)) = plan(&spec) {
@@ -343,6 +344,7 @@ impl Experiment for Slalom {
             seed,
             planner: point.settings(opts.planner()),
             controller: opts.controller,
+            physics_settings: opts.physics_settings(),
             max_seconds: opts.max_seconds,
         })?;
         let (kind, v, a_lat, a_max) = match point {
