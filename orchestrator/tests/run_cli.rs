@@ -685,6 +685,60 @@ fn a_physics_parameter_file_drives_the_physics_in_both_modes() {
     }
 }
 
+/// `plamo plan` writes the plan and its pictures, from the built-in settings or a
+/// `--planner-params` file (which shows in the plan), and names a bad file.
+#[test]
+fn plamo_plan_writes_the_plan_with_a_planner_parameter_file() {
+    let plan = |out: &Path, extra: &[&str]| {
+        Command::new(BIN)
+            .args(["plan", "--scene", "playground", "--instructions", ROUTE])
+            .args(["--out", out.to_str().unwrap()])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let top_speed = |out: &Path| {
+        let v: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("plan.json")).unwrap()).unwrap();
+        v["route"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|leg| leg["points"].as_array().unwrap().iter())
+            .map(|p| p["v"].as_f64().unwrap())
+            .fold(0.0, f64::max)
+    };
+    let dir = out_dir("plan-params");
+    let file = dir.join("planner.toml");
+    std::fs::write(&file, "run_speed = 1.2\n").unwrap();
+    let (built_in, slow) = (dir.join("built-in"), dir.join("slow"));
+    for (out, extra) in [
+        (&built_in, vec![]),
+        (&slow, vec!["--planner-params", file.to_str().unwrap()]),
+    ] {
+        let o = plan(out, &extra);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        for f in ["plan.json", "plan.png", "profile.png"] {
+            assert!(out.join(f).is_file(), "{f} not written");
+        }
+    }
+    let (v_built_in, v_slow) = (top_speed(&built_in), top_speed(&slow));
+    assert!(
+        v_slow <= 1.2 + 1e-9 && v_built_in > 1.5,
+        "top speed {v_slow} with run_speed = 1.2, {v_built_in} built in"
+    );
+    std::fs::write(&file, "run_sped = 1.2\n").unwrap();
+    let o = plan(
+        &dir.join("bad"),
+        &["--planner-params", file.to_str().unwrap()],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    for n in ["run_sped", "planner parameter file", file.to_str().unwrap()] {
+        assert!(err.contains(n), "`{n}` not in {err}");
+    }
+}
+
 /// The fastest planned speed in a run's `plans.json` \[m/s\].
 fn planned_top_speed(out: &Path) -> f64 {
     recorded_json(out, "plans.json")["initial"][0]["route"]

@@ -26,6 +26,11 @@ pub struct PlanArgs {
     /// Terrain preference c (edge length grows by e^(c * slope) - 1).
     #[arg(long)]
     c: Option<f64>,
+    /// Planner parameter file: a TOML table of planner settings (see
+    /// `PlannerSettings`; fields left out keep their defaults), as for `plamo run`;
+    /// `--c` goes on top of it.
+    #[arg(long)]
+    planner_params: Option<PathBuf>,
     /// Start position "X,Y" in metres; default: the first instruction's source.
     #[arg(long, value_parser = parse_xy, allow_hyphen_values = true)]
     start: Option<[f64; 2]>,
@@ -89,7 +94,10 @@ fn width_for(head: f64) -> u32 {
 pub fn run(args: PlanArgs) -> anyhow::Result<ExitCode> {
     let scene = plamo_scenes::resolve(&args.scene)
         .with_context(|| format!("loading scene `{}`", args.scene))?;
-    let mut settings = PlannerSettings::default();
+    let mut settings = match &args.planner_params {
+        Some(f) => plamo::spec::load_planner_settings(f).map_err(anyhow::Error::msg)?,
+        None => PlannerSettings::default(),
+    };
     if let Some(c) = args.c {
         settings.slope_preference_c = c;
     }
