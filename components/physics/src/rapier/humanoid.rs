@@ -37,6 +37,8 @@ pub(crate) struct RapierHumanoid {
     pub targets: [f64; NUM_JOINTS],
     /// Current root wrench.
     pub wrench: RootWrench,
+    /// [`crate::PhysicsSettings::rapier_root_torque_per_step`].
+    torque_per_step: bool,
 }
 
 fn v3(p: [f64; 3]) -> Vector {
@@ -81,7 +83,12 @@ fn hinge(axis: crate::humanoid::Axis, offset: [f64; 3], range: [f64; 2]) -> Gene
 
 impl RapierHumanoid {
     /// Build the humanoid at `pose` (at rest, targets = pose angles).
-    pub fn build(world: &mut PhysicsWorld, pose: &HumanoidPose, friction: f64) -> RapierHumanoid {
+    pub fn build(
+        world: &mut PhysicsWorld,
+        pose: &HumanoidPose,
+        friction: f64,
+        torque_per_step: bool,
+    ) -> RapierHumanoid {
         let q = pose.root_quat();
         let root_pose = Pose::from_parts(
             v3(pose.root_position),
@@ -178,6 +185,7 @@ impl RapierHumanoid {
             colliders,
             targets: joints,
             wrench: RootWrench::default(),
+            torque_per_step,
         };
         h.apply_controls(world);
         h
@@ -248,8 +256,55 @@ impl RapierHumanoid {
         }
         let root = &mut world.bodies[self.bodies[0]];
         root.reset_forces(false);
+        if self.torque_per_step {
+            // `reset_forces` leaves `add_torque`'s torque in place (rapier 0.36).
+            root.reset_torques(false);
+        }
         root.add_force(v3(self.wrench.force), true);
         root.add_torque(v3(self.wrench.torque), true);
+    }
+
+    /// See [`super::RapierBackend::body_contacts`].
+    pub fn body_contacts(
+        &self,
+        world: &PhysicsWorld,
+        body: usize,
+    ) -> (Vec<super::ContactPoint>, usize) {
+        let mut out = Vec::new();
+        let mut raw = 0;
+        let mut manifold = 0;
+        let f3 = |v: Vector| [v.x as f64, v.y as f64, v.z as f64];
+        for &(c, bi) in &self.colliders {
+            if bi != body {
+                continue;
+            }
+            let col = &world.colliders[c];
+            let in_body = col.position_wrt_parent().copied().unwrap_or(Pose::IDENTITY);
+            for pair in world.narrow_phase.contact_pairs_with(c) {
+                raw += pair.manifolds().len();
+                let first = pair.collider1 == c;
+                for m in pair.solver_manifolds() {
+                    let n = m.data.normal;
+                    let n = if first { n } else { -n };
+                    for sc in &m.data.solver_contacts {
+                        let Some(pt) = m.points.get(sc.contact_indices()[0] as usize) else {
+                            continue;
+                        };
+                        let p = if first { pt.local_p1 } else { pt.local_p2 };
+                        out.push(super::ContactPoint {
+                            manifold,
+                            local: f3(in_body * p),
+                            dist: pt.dist as f64,
+                            impulse: pt.data.impulse as f64,
+                            tangent_impulse: pt.data.tangent_impulse.norm() as f64,
+                            normal: f3(n),
+                        });
+                    }
+                    manifold += 1;
+                }
+            }
+        }
+        (out, raw)
     }
 
     /// Read the state; `terrain` is the terrain collider.

@@ -61,7 +61,12 @@ impl RapierBackend {
         let mut humanoids = Vec::with_capacity(settings.humanoids);
         for i in 0..settings.humanoids {
             let pose = default_pose(scene, i);
-            humanoids.push(RapierHumanoid::build(&mut world, &pose, settings.friction));
+            humanoids.push(RapierHumanoid::build(
+                &mut world,
+                &pose,
+                settings.friction,
+                settings.rapier_root_torque_per_step,
+            ));
         }
         let motions = ObstacleMotions::new(scene);
         let obstacles = motions.states_at(0.0).collect();
@@ -84,6 +89,43 @@ impl RapierBackend {
 
     fn read_state(&mut self, i: usize) {
         self.humanoids[i].read_state(&self.world, self.handles.terrain, &mut self.states[i]);
+    }
+}
+
+/// One contact point the solver saw between a humanoid's body and the scene at the
+/// last step ([`RapierBackend::body_contacts`]): what holds a foot against sliding
+/// and turning (rapier has no torsional friction, so only the tangential friction at
+/// these points resists a yaw torque).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactPoint {
+    /// Index of the solver manifold (a contact plane) among the body's manifolds.
+    pub manifold: usize,
+    /// The point on the body, in the body's frame \[m\].
+    pub local: [f64; 3],
+    /// Separation along the normal (negative: penetration) \[m\].
+    pub dist: f64,
+    /// Normal impulse applied at the last step \[N s\].
+    pub impulse: f64,
+    /// Tangential (friction) impulse applied at the last step, its magnitude \[N s\].
+    pub tangent_impulse: f64,
+    /// The manifold's contact normal, world frame, pointing away from the body.
+    pub normal: [f64; 3],
+}
+
+impl RapierBackend {
+    /// Every contact point the constraint solver used at the last step between body
+    /// `body` ([`crate::BODY_NAMES`] order) of humanoid `index` and the scene, and the
+    /// number of per-subshape manifolds the narrow phase produced before rapier merged
+    /// those of one plane into its solver's clusters (at most 4 points each); none for
+    /// a body index past the last. A diagnostic for the physics examples (`foot_yaw_hold`);
+    /// the controller never reads it.
+    pub fn body_contacts(
+        &self,
+        index: usize,
+        body: usize,
+    ) -> Result<(Vec<ContactPoint>, usize), PhysicsError> {
+        PhysicsError::check_index(index, self.humanoids.len())?;
+        Ok(self.humanoids[index].body_contacts(&self.world, body))
     }
 }
 
@@ -112,8 +154,12 @@ impl PhysicsBackend for RapierBackend {
         PhysicsError::check_index(index, self.humanoids.len())?;
         pose.validate()?;
         self.humanoids[index].remove(&mut self.world);
-        self.humanoids[index] =
-            RapierHumanoid::build(&mut self.world, pose, self.settings.friction);
+        self.humanoids[index] = RapierHumanoid::build(
+            &mut self.world,
+            pose,
+            self.settings.friction,
+            self.settings.rapier_root_torque_per_step,
+        );
         self.diverged[index] = false;
         self.read_state(index);
         Ok(())
