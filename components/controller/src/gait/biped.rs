@@ -12,9 +12,7 @@
 //!   out under a body that turns back and moves fast sideways where the form asks for
 //!   it) by two-segment leg IK; the path is followed kd/kp ahead (the lag of a PD
 //!   servo behind a moving target) plus the form's `swing_lead` (the leg's inertia
-//!   adds to it); the swing is quicker at higher speed (`step_time_per_speed`) and,
-//!   where the form asks for it, ends as the stance foot nears the end of its reach
-//!   (`stride_reach`);
+//!   adds to it); the swing is quicker at higher speed (`step_time_per_speed`);
 //! - the gait is terrain-aware ([`Ground`]): the ground comes from the local height
 //!   map where it reaches and, ahead of it, from the ground under the plan's waypoints;
 //!   the sole lands on the highest ground under it; the swing clears the highest
@@ -113,9 +111,6 @@ pub(crate) struct BipedGait {
     /// Integral of the forward velocity error: the swing foot lands this much
     /// closer (when lagging) \[m\].
     foot_bias: f64,
-    /// Duration of the current swing after the form's `stride_reach` shortened it;
-    /// it only shrinks within a swing, so the swing path never runs back \[s\].
-    swing_time: f64,
 }
 
 /// Largest change of the desired velocity \[m/s^2\]. The plan's point moves at full
@@ -148,10 +143,6 @@ const SIDE_STEP_FROM: f64 = 0.3;
 /// Heading error over which the turn-back switches (`turn_lat_share`,
 /// `side_step_gain`) fade in from the form's `turn_from` \[rad\].
 const TURN_FADE: f64 = 0.6;
-
-/// Forward speed below which `stride_reach` leaves the swing alone \[m/s\]: a slow
-/// stance foot takes seconds to reach the end of its reach.
-const STRIDE_REACH_MIN_SPEED: f64 = 0.5;
 
 /// Swing-foot clearance above the stance foot's that counts as touchdown \[m\].
 const TOUCHDOWN: f64 = 0.02;
@@ -191,7 +182,6 @@ impl BipedGait {
             v_cmd: [0.0; 2],
             foot_bias: 0.0,
             h_cmd: 0.0,
-            swing_time: f64::INFINITY,
         }
     }
 
@@ -320,27 +310,6 @@ impl<'a> Ground<'a> {
     }
 }
 
-/// Swing duration \[s\] that brings the swing foot down as the stance foot, now at
-/// `stance_x` \[m\] from the root (heading frame, + ahead), gets `reach` \[m\] behind it
-/// at forward speed `vx` \[m/s\], `phase` \[s\] into a swing of nominal `step_time`
-/// whose path is followed `lead` \[s\] ahead; never below [`STEP_TIME_RANGE`]'s lower
-/// share of `step_time` (the caller keeps it below `step_time`). Infinite (no limit)
-/// where `reach` is 0 (off) or the body is slow.
-fn reach_limited_swing(
-    step_time: f64,
-    phase: f64,
-    lead: f64,
-    stance_x: f64,
-    vx: f64,
-    reach: f64,
-) -> f64 {
-    if reach <= 0.0 || vx <= STRIDE_REACH_MIN_SPEED {
-        return f64::INFINITY;
-    }
-    let left = ((stance_x + reach) / vx).max(0.0);
-    (phase + lead + left).max(STEP_TIME_RANGE[0] * step_time)
-}
-
 /// How much of a turn-back a heading error \[rad\] is, 0-1: none below `from` \[rad\]
 /// (paths bend), all of it from `from` + [`TURN_FADE`] (the plan leads off sideways or
 /// backwards), smooth in between.
@@ -463,14 +432,11 @@ impl BipedGait {
             // differs by engine (contact softness) and by how the foot lands.
             let clearance = |f: [f64; 3]| obs.root_height + f[2] - ground.under_sole(f[0], f[1]);
             let rest = clearance(feet[self.stance]).min(ANKLE_HEIGHT + 0.03);
-            // Half the nominal step even where `stride_reach` shortened the swing: the
-            // foot has barely left the ground by half a short swing.
             let touchdown =
                 self.phase > 0.5 * step_time && clearance(feet[swing]) < rest + TOUCHDOWN;
             if touchdown || self.phase > 1.5 * step_time {
                 self.stance = swing;
                 self.phase = 0.0;
-                self.swing_time = f64::INFINITY;
                 switched = true;
                 self.swing_start_rel_stance = sub3(feet[1 - self.stance], feet[self.stance]);
             }
@@ -482,15 +448,7 @@ impl BipedGait {
         // Swing foot target (heading frame, relative to the root).
         // The PD servo lags a moving target by kd/kp: follow the path that far ahead.
         let lead = JOINTS[j.hip[0][1]].kd / self.hip_kp + form.swing_lead;
-        self.swing_time = self.swing_time.min(reach_limited_swing(
-            step_time,
-            self.phase,
-            lead,
-            feet[stance][0],
-            vx,
-            form.stride_reach,
-        ));
-        let s_lin = ((self.phase + lead) / self.swing_time.min(step_time)).min(1.0);
+        let s_lin = ((self.phase + lead) / step_time).min(1.0);
         let s = smoothstep(s_lin);
         // Forward placement is measured from the centre of mass (body origins weighted
         // by body mass): a leaning or crouching trunk carries it ahead of the pelvis.
@@ -657,7 +615,6 @@ impl BipedGait {
         self.phase = 0.0;
         self.switch_offset = [0.0; NUM_JOINTS];
         self.foot_bias = 0.0;
-        self.swing_time = f64::INFINITY;
     }
 }
 
@@ -788,31 +745,6 @@ mod tests {
         assert_eq!(turn_weight(-3.0, 0.6), 1.0);
         assert_eq!(turn_weight(1.2, 1.2), 0.0);
         assert_eq!(turn_weight(-1.8, 1.2), 1.0);
-    }
-
-    #[test]
-    fn the_swing_ends_as_the_stance_foot_runs_out_of_reach() {
-        let (step, lead) = (0.43, 0.1);
-        // Off, or slow: no limit.
-        assert_eq!(
-            reach_limited_swing(step, 0.1, lead, -0.3, 4.0, 0.0),
-            f64::INFINITY
-        );
-        assert_eq!(
-            reach_limited_swing(step, 0.1, lead, -0.3, 0.3, 0.45),
-            f64::INFINITY
-        );
-        // At 4 m/s a stance foot 0.25 m behind gets 0.45 m behind in 0.05 s: the swing
-        // path ends then (its lead ahead), 0.1 s into the swing.
-        let t = reach_limited_swing(step, 0.1, lead, -0.25, 4.0, 0.45);
-        assert!((t - 0.25).abs() < 1e-12, "{t}");
-        // A foot already past its reach: the swing ends now, but not quicker than half
-        // the nominal step.
-        let t = reach_limited_swing(step, 0.05, lead, -0.7, 4.0, 0.45);
-        assert_eq!(t, 0.5 * step);
-        // At 1 m/s a foot still ahead has time for the nominal step (the caller takes
-        // the min).
-        assert!(reach_limited_swing(step, 0.0, lead, 0.2, 1.0, 0.45) > step);
     }
 
     #[test]

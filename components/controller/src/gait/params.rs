@@ -125,13 +125,6 @@ pub struct FormParams {
     /// past it too. Absent in older files: 0.6 rad.
     #[serde(default = "default_turn_from")]
     pub turn_from: f64,
-    /// Distance behind the root at which the stance foot reaches the end of its
-    /// reach \[m\]: the swing is shortened so its foot comes down as the stance foot
-    /// gets there at the current speed (a stride-limited cadence: a long fast stance
-    /// leaves the ground with no swing foot down and the body pitches over in flight).
-    /// Absent in older files: 0 (off: the swing takes `step_time`).
-    #[serde(default)]
-    pub stride_reach: f64,
 }
 
 fn default_turn_from() -> f64 {
@@ -174,7 +167,6 @@ impl FormParams {
             side_step_gain: l(self.side_step_gain, b.side_step_gain),
             turn_lat_share: l(self.turn_lat_share, b.turn_lat_share),
             turn_from: l(self.turn_from, b.turn_from),
-            stride_reach: l(self.stride_reach, b.stride_reach),
         }
     }
 
@@ -217,9 +209,6 @@ impl FormParams {
         }
         if !(self.turn_from >= 0.0 && self.turn_from < 3.0) {
             return bad("turn_from", "must be in [0, 3) rad");
-        }
-        if !(self.stride_reach >= 0.0 && self.stride_reach < 1.0) {
-            return bad("stride_reach", "must be in [0, 1) m");
         }
         if !(self.push_err_gain >= 0.0 && self.push_err_gain < 1.0) {
             return bad("push_err_gain", "must be in [0, 1) s");
@@ -336,14 +325,13 @@ mod tests {
         assert!(e.to_string().contains("version 9"), "{e}");
         // One field out of range at a time: the message names it (or its section).
         type Spoil = fn(&mut GaitParams);
-        let spoiled: [(Spoil, &str); 7] = [
+        let spoiled: [(Spoil, &str); 6] = [
             (|p| p.walk.step_time = 0.0, "[walk]"),
             (|p| p.run.rough_fwd_gain = -0.01, "rough_fwd_gain"),
             (|p| p.run.pitch_fwd_gain = -0.5, "pitch_fwd_gain"),
             (|p| p.crouch.side_step_gain = -0.1, "side_step_gain"),
             (|p| p.walk.turn_lat_share = 1.5, "turn_lat_share"),
             (|p| p.run.turn_from = -0.1, "turn_from"),
-            (|p| p.run.stride_reach = -0.2, "stride_reach"),
         ];
         for (spoil, field) in spoiled {
             let mut bad = GaitParams::default();
@@ -360,7 +348,6 @@ mod tests {
             .collect();
         let p = GaitParams::from_toml(&old, Path::new("old.toml")).unwrap();
         assert_eq!((p.crouch.turn_from, p.crouch.turn_lat_share), (0.6, 0.0));
-        assert_eq!(p.run.stride_reach, 0.0);
         let e =
             GaitParams::from_toml("version = 1\n[walk]\nfoo = 1", Path::new("y.toml")).unwrap_err();
         assert!(e.to_string().contains("y.toml"), "{e}");
