@@ -437,6 +437,55 @@ impl Planner {
         best.map(|b| b.1).ok_or(UnreachableReason::StartBlocked)
     }
 
+    /// The cells of `cells` where a leg need not crawl: no top within
+    /// `character_radius` and a cell (the refiner's reach, `refine::head_limit`, with
+    /// a cell to spare) puts the head below `crawl_switch_height`.
+    fn stand_cells(&self, cells: &[usize]) -> Vec<usize> {
+        let s = &self.settings;
+        let g = &self.grid;
+        let crawl_head = (s.crawl_switch_height + s.head_margin) as f32;
+        let r = (s.character_radius / g.resolution).ceil() as isize + 1;
+        let roomy = |c: usize| {
+            let (ci, cj) = ((c % g.nx) as isize, (c / g.nx) as isize);
+            (-r..=r).all(|dj| {
+                (-r..=r).all(|di| {
+                    let (i, j) = (ci + di, cj + dj);
+                    di * di + dj * dj > r * r
+                        || i < 0
+                        || j < 0
+                        || i >= g.nx as isize
+                        || j >= g.ny as isize
+                        || g.headroom[j as usize * g.nx + i as usize] >= crawl_head
+                })
+            })
+        };
+        cells.iter().copied().filter(|&c| roomy(c)).collect()
+    }
+
+    /// The goal sets a leg of `form` into instruction `index`'s target tries in
+    /// turn, from its target cells `cells`, each the deep ones of: with
+    /// `stand_at_goal` on a leg that is not a crawl, the cells out of the crawl zone
+    /// (where it stands whichever way it comes), then those where it need not crawl
+    /// ([`Self::stand_cells`]: coming from the open side it stands); then all.
+    fn goal_sets(&self, index: usize, form: Locomotion, cells: &[usize]) -> Vec<Vec<usize>> {
+        let mut sets = Vec::new();
+        if self.settings.stand_at_goal && form != Locomotion::Crawl && self.grid.has_tops {
+            let open: Vec<usize> = cells
+                .iter()
+                .copied()
+                .filter(|&c| !self.grid.crawl_zone[c])
+                .collect();
+            for set in [open, self.stand_cells(cells)] {
+                if !set.is_empty() && set.len() < cells.len() {
+                    sets.push(self.deep_cells(index, &set));
+                }
+            }
+        }
+        sets.push(self.deep_cells(index, cells));
+        sets.dedup();
+        sets
+    }
+
     /// Plan instruction `index` from (x, y) with initial speed `v0` \[m/s\], timed from
     /// absolute time `t0` \[s\].
     pub fn plan_instruction(
@@ -459,10 +508,16 @@ impl Planner {
         if !self.components_for(min_head).connected(start, &goals) {
             return Err(self.unreachable(index, UnreachableReason::Disconnected));
         }
-        let deep = self.deep_cells(index, &goals);
-        let (path, limits) = Some(&deep)
-            .filter(|d| self.components_for(min_head).connected(start, d))
-            .and_then(|d| self.search_body(start, d, min_head, limits, form))
+        let mut found = None;
+        for set in self.goal_sets(index, form, &goals) {
+            if !set.is_empty() && self.components_for(min_head).connected(start, &set) {
+                found = self.search_body(start, &set, min_head, limits, form);
+                if found.is_some() {
+                    break;
+                }
+            }
+        }
+        let (path, limits) = found
             .or_else(|| self.search_body(start, &goals, min_head, limits, form))
             .ok_or_else(|| self.unreachable(index, UnreachableReason::Disconnected))?;
         let ctx = RefineCtx {
@@ -595,7 +650,7 @@ impl Planner {
                     return Err(self.unreachable(index, r));
                 }
             };
-            let goals: Vec<usize> = if rejoin == last {
+            let goal_sets: Vec<Vec<usize>> = if rejoin == last {
                 // The detour ends the instruction: any target cell the discs leave.
                 let (cells, _) = self.goal_cells(index, min_head);
                 if cells.is_empty() {
@@ -617,15 +672,18 @@ impl Planner {
                     };
                     return Err(self.unreachable(index, r));
                 }
-                self.deep_cells(index, &free)
+                self.goal_sets(index, form, &free)
             } else {
-                vec![
+                vec![vec![
                     self.start_cell(rj.x, rj.y, min_head, &limits)
                         .map_err(|_| self.unreachable(index, UnreachableReason::TargetBlocked))?,
-                ]
+                ]]
             };
-            let Some((path, limits)) = self.search_body(start, &goals, min_head, &limits, form)
-            else {
+            let found = goal_sets
+                .iter()
+                .filter(|g| !g.is_empty())
+                .find_map(|g| self.search_body(start, g, min_head, &limits, form));
+            let Some((path, limits)) = found else {
                 break;
             };
             let ctx = RefineCtx {

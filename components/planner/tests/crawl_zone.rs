@@ -1,7 +1,8 @@
 //! A leg whose straight line runs under a 3 m x 3 m top, at 0.6 m (a crawl there) or
 //! 0.9 m (a crouch): with `crawl_zone_cost` and `stoop_zone_cost` a walk goes around
 //! the top, a leg already that low is not affected, and where no way leads around
-//! the route still goes under it.
+//! the route still goes under it. A walk into a landmark half under a low top ends
+//! in its open half with `stand_at_goal`.
 
 use plamo_planner::{PlanGrid, Planner, PlannerSettings, Trajectory};
 use plamo_scenes::{Footprint, HeightGrid, Landmark, Region, Scene, TopObstacle, Wall};
@@ -178,6 +179,8 @@ fn plan_along_path(scene: Scene, form: &str, along_path: bool) -> Trajectory {
         crawl_zone_cost: 0.0,
         stoop_zone_cost: 0.0,
         crawl_reach_along_path: along_path,
+        // The goal where the old rule puts it (with it on, it moves out of the zone).
+        stand_at_goal: false,
         ..Default::default()
     };
     plan_with(scene, form, settings)
@@ -229,4 +232,50 @@ fn with_crawl_reach_along_path_the_head_is_down_a_body_length_before_the_top() {
         );
     }
     assert!(lowest_head(&t) < 0.6);
+}
+
+/// The walk from the west into the east landmark, whose north half lies under a
+/// 0.6 m top (y 6-10), with `stand_at_goal` as given.
+fn plan_into_half_covered(stand_at_goal: bool) -> Trajectory {
+    let mut scene = field(0.6, false);
+    scene.tops[0].footprint = Footprint::axis_aligned([21.0, 8.0], [2.0, 2.0]);
+    // Without the zone costs, which would keep the goal off the top's edge too.
+    let settings = PlannerSettings {
+        stand_at_goal,
+        crawl_zone_cost: 0.0,
+        stoop_zone_cost: 0.0,
+        ..Default::default()
+    };
+    plan_with(scene, "walk", settings)
+}
+
+#[test]
+fn with_stand_at_goal_a_walk_into_a_landmark_half_under_a_low_top_ends_on_its_feet() {
+    let anywhere = plan_into_half_covered(false);
+    let end = anywhere.points.last().unwrap();
+    assert!(
+        end.head_height < 0.6,
+        "ending at the nearest deep cell, by the top's edge, the walk crawls: head {:.2} m \
+         at ({:.2}, {:.2})",
+        end.head_height,
+        end.x,
+        end.y
+    );
+    let standing = plan_into_half_covered(true);
+    let end = standing.points.last().unwrap();
+    assert!(
+        lowest_head(&standing) > 1.4,
+        "the walk ends in the landmark's open half, never crawling: lowest head {:.2} m, \
+         end ({:.2}, {:.2})",
+        lowest_head(&standing),
+        end.x,
+        end.y
+    );
+    assert!(
+        (end.x - 21.0).hypot(end.y - 6.0) <= 1.0 - PlannerSettings::default().goal_depth + 0.1,
+        "still {:.2} m deep in the landmark: ({:.2}, {:.2})",
+        PlannerSettings::default().goal_depth,
+        end.x,
+        end.y
+    );
 }
