@@ -28,7 +28,10 @@
 //!   three off in the shipped file). A swinging limb clears the plan's ground at its
 //!   landing point too (`swing_ahead`), and the head keeps `head_clear` over the
 //!   ground under it: the body rises, the stance hands push (`head_push`) (all three
-//!   on in the shipped file).
+//!   on in the shipped file). Where the body rolls, the low side's limbs reach down
+//!   and the high side's draw up (`roll_reach`, `roll_rate_reach`, off in the shipped
+//!   file; beyond `roll_reach_from`, on smooth ground only with
+//!   `roll_reach_smooth_only`).
 //! - Getting down and up are joint-space blends over a fixed time from the joint
 //!   angles at the switch to the crawl's (or standing) pose, with the residual
 //!   wrench holding height rate and attitude.
@@ -269,6 +272,29 @@ pub struct CrawlParams {
     /// it. Where it lands is unchanged (see `ground_ahead`). Off: the map's ground.
     #[serde(default)]
     pub swing_ahead: bool,
+    /// Contact height offset per rad of roll per m of lever, on top of
+    /// `attitude_gain`'s \[-\]: the limbs on the low side reach down and those on the
+    /// high side draw up (at most `MAX_ROLL_REACH` each). On flat ground the crawl's
+    /// falls were mostly slow roll-overs over an arm (roll growing over 1-2 s, the arms
+    /// not folding; RESULTS "Crawl", session 13), which `attitude_gain`'s 0.22 (2.5 cm
+    /// at 0.5 rad for a hand) barely answers. 0: off.
+    #[serde(default)]
+    pub roll_reach: f64,
+    /// Contact height offset per rad/s of roll rate per m of lever \[s\] (with
+    /// `roll_reach`'s bound): the limbs answer the roll as it starts. 0: off.
+    #[serde(default)]
+    pub roll_rate_reach: f64,
+    /// Roll magnitude below which `roll_reach` does nothing \[rad\]: it answers the
+    /// roll beyond this (0: all of it): the level crawl's roll wobbles with its gait
+    /// and the ground, and the limbs need not reach after that.
+    #[serde(default)]
+    pub roll_reach_from: f64,
+    /// `roll_reach` and `roll_rate_reach` fade out with the share of rough ground under
+    /// the body (`rough_step`; with `rough_speed` left out the speed is not capped):
+    /// everywhere, the reach took flat-ground crawl falls down and gravel and stairs
+    /// ones up (MuJoCo tours, RESULTS "Crawl", session 13).
+    #[serde(default)]
+    pub roll_reach_smooth_only: bool,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -374,7 +400,10 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 61] = [
+        let ranges: [(&'static str, f64, f64, f64); 64] = [
+            ("roll_reach_from", self.roll_reach_from, 0.0, 1.5),
+            ("roll_reach", self.roll_reach, 0.0, 10.0),
+            ("roll_rate_reach", self.roll_rate_reach, 0.0, 10.0),
             ("head_clear", self.head_clear, 0.0, 1.0),
             ("head_push", self.head_push, 0.0, 10.0),
             ("slope_pitch", self.slope_pitch, 0.0, 1.5),
@@ -716,6 +745,10 @@ const SLOPE_FILTER: f64 = 0.3;
 /// Largest drop of the hands' targets for a sinking head (`head_push`) \[m\]: the
 /// arms are straight a little beyond it.
 const MAX_HEAD_PUSH: f64 = 0.1;
+
+/// Largest contact height offset of `roll_reach` and `roll_rate_reach` together, per
+/// limb \[m\]: about what a hand or knee can reach beyond its nominal stance.
+const MAX_ROLL_REACH: f64 = 0.1;
 
 /// Heading error below which a crawl that has just got down faces its plan \[rad\].
 const ALIGNED: f64 = 0.3;
@@ -1183,6 +1216,19 @@ impl CrawlGait {
                     c[2] += p.attitude_gain * (roll * n[1] - pitch_err * n[0])
                         - p.height_gain_limbs * height_err;
                 }
+                if p.roll_reach > 0.0 || p.roll_rate_reach > 0.0 {
+                    // The low side's limbs reach down, the high side's draw up.
+                    let lean = roll.signum() * (roll.abs() - p.roll_reach_from).max(0.0);
+                    let smooth = if p.roll_reach_smooth_only {
+                        1.0 - self.rough
+                    } else {
+                        1.0
+                    };
+                    let per_lever = smooth * (p.roll_reach * lean + p.roll_rate_reach * wx);
+                    for (c, n) in contacts.iter_mut().zip(&nominal) {
+                        c[2] += (per_lever * n[1]).clamp(-MAX_ROLL_REACH, MAX_ROLL_REACH);
+                    }
+                }
                 if p.head_push > 0.0 {
                     // The measured head sinking towards the ground under it: the
                     // stance hands push the front up.
@@ -1354,6 +1400,116 @@ mod tests {
         assert!((first + cap).abs() < 1e-9, "{first}");
         let shared = roll_torque(old);
         assert!(shared > -0.7 * cap, "{shared}");
+    }
+
+    #[test]
+    fn the_low_sides_arm_reaches_down_with_roll_reach() {
+        // Elbow targets (right, left) of a crawl rolled `roll` (right side low) at a
+        // roll rate `rate`.
+        let elbows = |params: CrawlParams, roll: f64, rate: f64| {
+            let mut obs = crawling_obs();
+            obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
+            obs.root_ang_vel = [rate, 0.0, 0.0];
+            let mut gait = CrawlGait::new(params, ControllerSettings::default());
+            gait.reset();
+            let mut out = Action::default();
+            gait.act(&obs, &mut out);
+            ["right_elbow", "left_elbow"].map(|n| out.pd_targets[idx(n)])
+        };
+        let off = CrawlParams {
+            roll_reach: 0.0,
+            roll_rate_reach: 0.0,
+            ..CrawlParams::default()
+        };
+        let on = CrawlParams {
+            roll_reach: 1.0,
+            roll_rate_reach: 0.2,
+            ..off
+        };
+        for (roll, rate) in [(0.3, 0.0), (0.0, 1.5)] {
+            let [r0, l0] = elbows(off, roll, rate);
+            let [r1, l1] = elbows(on, roll, rate);
+            // The right arm straightens, the left one bends.
+            assert!(
+                r1.abs() < r0.abs() - 0.02,
+                "{roll} {rate}: right {r0} -> {r1}"
+            );
+            assert!(
+                l1.abs() > l0.abs() + 0.02,
+                "{roll} {rate}: left {l0} -> {l1}"
+            );
+        }
+        // Level and still, the switch changes nothing.
+        assert_eq!(elbows(off, 0.0, 0.0), elbows(on, 0.0, 0.0));
+        // From 0.2 rad: a slight lean is left to `attitude_gain`, a larger one is not.
+        let from = CrawlParams {
+            roll_rate_reach: 0.0,
+            roll_reach_from: 0.2,
+            ..on
+        };
+        assert_eq!(elbows(off, 0.15, 0.0), elbows(from, 0.15, 0.0));
+        let ([r0, _], [r1, _]) = (elbows(off, 0.4, 0.0), elbows(from, 0.4, 0.0));
+        assert!(r1.abs() < r0.abs() - 0.02, "right {r0} -> {r1}");
+    }
+
+    #[test]
+    fn roll_reach_leaves_stairs_alone_with_roll_reach_smooth_only() {
+        // The right elbow's target after 2 s rolled 0.4 rad (right side low) over a
+        // height map.
+        let right_elbow = |params: CrawlParams, map: &dyn Fn(f64, f64) -> f64| {
+            let mut obs = crawling_obs();
+            let roll: f64 = 0.4;
+            obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
+            for r in 0..LOCAL_MAP_SIDE {
+                for c in 0..LOCAL_MAP_SIDE {
+                    obs.height_map[r * LOCAL_MAP_SIDE + c] = map(map_coord(r), map_coord(c));
+                }
+            }
+            let mut gait = CrawlGait::new(params, ControllerSettings::default());
+            gait.reset();
+            let mut out = Action::default();
+            for _ in 0..(2.0 / CONTROL_DT) as usize {
+                gait.phase = 0.0;
+                gait.act(&obs, &mut out);
+            }
+            out.pd_targets[idx("right_elbow")]
+        };
+        let off = CrawlParams {
+            roll_reach: 0.0,
+            roll_rate_reach: 0.0,
+            roll_reach_from: 0.0,
+            roll_reach_smooth_only: false,
+            rough_step: 0.03,
+            ..CrawlParams::default()
+        };
+        let smooth_only = CrawlParams {
+            roll_reach: 1.5,
+            roll_reach_smooth_only: true,
+            ..off
+        };
+        let everywhere = CrawlParams {
+            roll_reach_smooth_only: false,
+            ..smooth_only
+        };
+        // The random scenes' steepest stairs, 0.15 m x 0.31 m.
+        let stairs = |x: f64, _y: f64| 0.15 * (x / 0.31).floor();
+        let flat = |_x: f64, _y: f64| 0.0;
+        let (s0, s1, s2) = (
+            right_elbow(off, &stairs),
+            right_elbow(smooth_only, &stairs),
+            right_elbow(everywhere, &stairs),
+        );
+        // (The stairs' rough share is a little short of 1.)
+        assert!(
+            s2.abs() < s0.abs() - 0.05,
+            "stairs, everywhere: {s0} -> {s2}"
+        );
+        assert!(
+            (s1 - s0).abs() < 0.25 * (s2 - s0).abs(),
+            "stairs: {s0} -> {s1} ({s2} everywhere)"
+        );
+        let (f0, f1) = (right_elbow(off, &flat), right_elbow(smooth_only, &flat));
+        assert!(f1.abs() < f0.abs() - 0.02, "flat: {f0} -> {f1}");
     }
 
     #[test]
