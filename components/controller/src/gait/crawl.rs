@@ -1303,6 +1303,15 @@ mod tests {
         obs.root_height = 0.5;
         obs
     }
+
+    /// Fill `obs`'s height map with `map(x, y)` at each sample (heading frame).
+    fn fill_map(obs: &mut Observation, map: &dyn Fn(f64, f64) -> f64) {
+        for r in 0..LOCAL_MAP_SIDE {
+            for c in 0..LOCAL_MAP_SIDE {
+                obs.height_map[r * LOCAL_MAP_SIDE + c] = map(map_coord(r), map_coord(c));
+            }
+        }
+    }
     use crate::gait::map_plane::map_coord;
     use crate::observation::NUM_WAYPOINTS;
 
@@ -1333,11 +1342,7 @@ mod tests {
             obs.waypoints[i] = [(i + 1) as f64 * WAYPOINT_SPACING, 0.0, 0.0];
             obs.waypoint_speeds[i] = 1.0;
         }
-        for r in 0..LOCAL_MAP_SIDE {
-            for c in 0..LOCAL_MAP_SIDE {
-                obs.height_map[r * LOCAL_MAP_SIDE + c] = map(map_coord(r), map_coord(c));
-            }
-        }
+        fill_map(&mut obs, &map);
         let mut gait = CrawlGait::new(params, ControllerSettings::default());
         gait.reset();
         let mut out = Action::default();
@@ -1460,11 +1465,7 @@ mod tests {
             let mut obs = crawling_obs();
             let roll: f64 = 0.4;
             obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
-            for r in 0..LOCAL_MAP_SIDE {
-                for c in 0..LOCAL_MAP_SIDE {
-                    obs.height_map[r * LOCAL_MAP_SIDE + c] = map(map_coord(r), map_coord(c));
-                }
-            }
+            fill_map(&mut obs, map);
             let mut gait = CrawlGait::new(params, ControllerSettings::default());
             gait.reset();
             let mut out = Action::default();
@@ -1617,11 +1618,7 @@ mod tests {
             let stairs = |x: f64| sign * 0.15 * (x / 0.31).floor();
             let mut obs = crawling_obs();
             obs.head_pos = [0.6, 0.0, -0.15];
-            for r in 0..LOCAL_MAP_SIDE {
-                for c in 0..LOCAL_MAP_SIDE {
-                    obs.height_map[r * LOCAL_MAP_SIDE + c] = stairs(map_coord(r));
-                }
-            }
+            fill_map(&mut obs, &|x, _| stairs(x));
             for i in 0..NUM_WAYPOINTS {
                 let x = 0.25 * (i + 1) as f64;
                 obs.waypoints[i] = [x, 0.0, 0.0];
