@@ -612,6 +612,35 @@ fn the_trajectory_records_the_falls_the_summary_counts() {
     eprintln!("{total} falls recorded and counted");
 }
 
+/// The short route run with `flag file`, bit-identical in-process and as processes
+/// (`run` names its shared memory), and the same run built in (into `built_in`);
+/// the file must change the trajectory. Returns the run with the file.
+fn file_drives_the_run(flag: &str, file: &Path, run: &str, built_in: &Path) -> Output {
+    let base = ["--instructions", ROUTE, "--max-seconds", "3", "--seed", "7"];
+    let mut args = base.to_vec();
+    args.extend([flag, file.to_str().unwrap()]);
+    let with_file = same_in_both_modes(&args, run);
+    let without = run_ok(&base, built_in);
+    assert_ne!(
+        digest(&with_file),
+        digest(&without),
+        "{flag}: the file changed nothing"
+    );
+    with_file
+}
+
+/// The standard error of a run refused for `flag path`, which must name the file.
+fn refused(flag: &str, path: &Path) -> String {
+    let o = plamo(&["--instructions", ROUTE, "--max-seconds", "1"])
+        .args([flag, path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(!o.status.success(), "{flag} {} was taken", path.display());
+    assert!(err.contains(path.to_str().unwrap()), "{err}");
+    err
+}
+
 #[test]
 fn parameter_files_from_tune_drive_the_controller_in_both_modes() {
     // A gait file like `plamo tune` writes, with a slower run cadence.
@@ -621,28 +650,15 @@ fn parameter_files_from_tune_drive_the_controller_in_both_modes() {
     gait.walk.step_time += 0.03;
     let file = dir.join("gait.toml");
     std::fs::write(&file, plamo_controller::to_toml(&gait, "test").unwrap()).unwrap();
-    let base = ["--instructions", ROUTE, "--max-seconds", "3", "--seed", "7"];
-    let mut args = base.to_vec();
-    args.extend(["--gait-params", file.to_str().unwrap()]);
-    let tuned = same_in_both_modes(&args, "cli-test-params");
-    let built_in = run_ok(&base, &out_dir("params-built-in"));
-    assert_ne!(
-        digest(&tuned),
-        digest(&built_in),
-        "the file changed nothing"
+    file_drives_the_run(
+        "--gait-params",
+        &file,
+        "cli-test-params",
+        &out_dir("params-built-in"),
     );
     // A file that is not there, or not a crawl file, is named.
-    for (flag, path) in [
-        ("--crawl-params", dir.join("missing.toml")),
-        ("--crawl-params", file.clone()),
-    ] {
-        let o = plamo(&["--instructions", ROUTE, "--max-seconds", "1"])
-            .args([flag, path.to_str().unwrap()])
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success(), "{flag} {}", path.display());
-        assert!(err.contains(path.to_str().unwrap()), "{err}");
+    for path in [dir.join("missing.toml"), file.clone()] {
+        refused("--crawl-params", &path);
     }
 }
 
@@ -652,15 +668,11 @@ fn a_physics_parameter_file_drives_the_physics_in_both_modes() {
     let file = dir.join("physics.toml");
     // Stiffer feet and less grip than the defaults (11 Hz, 1.0).
     std::fs::write(&file, "rapier_contact_hz = 30.0\nfriction = 0.8\n").unwrap();
-    let base = ["--instructions", ROUTE, "--max-seconds", "3", "--seed", "7"];
-    let mut args = base.to_vec();
-    args.extend(["--physics-params", file.to_str().unwrap()]);
-    let stiff = same_in_both_modes(&args, "cli-test-physics-params");
-    let built_in = run_ok(&base, &out_dir("physics-params-built-in"));
-    assert_ne!(
-        digest(&stiff),
-        digest(&built_in),
-        "the file changed nothing"
+    file_drives_the_run(
+        "--physics-params",
+        &file,
+        "cli-test-physics-params",
+        &out_dir("physics-params-built-in"),
     );
     // A misspelt field, a value out of range, a file that is not there: each named.
     let typo = dir.join("typo.toml");
@@ -673,13 +685,8 @@ fn a_physics_parameter_file_drives_the_physics_in_both_modes() {
         (&range, "rapier_solver_iterations"),
         (&missing, "missing.toml"),
     ] {
-        let o = plamo(&["--instructions", ROUTE, "--max-seconds", "1"])
-            .args(["--physics-params", path.to_str().unwrap()])
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success(), "{}", path.display());
-        for n in [needle, "physics parameter file", path.to_str().unwrap()] {
+        let err = refused("--physics-params", path);
+        for n in [needle, "physics parameter file"] {
             assert!(err.contains(n), "`{n}` not in {err}");
         }
     }
@@ -756,14 +763,17 @@ fn a_planner_parameter_file_drives_the_planner_in_both_modes() {
     let file = dir.join("planner.toml");
     // Slower than the run leg plans by default (1.64 m/s: a_min caps it on 13 m).
     std::fs::write(&file, "run_speed = 1.2\n").unwrap();
+    let built_in_dir = out_dir("planner-params-built-in");
+    file_drives_the_run(
+        "--planner-params",
+        &file,
+        "cli-test-planner-params",
+        &built_in_dir,
+    );
+    let slow_dir = out_dir("planner-params-slow");
     let base = ["--instructions", ROUTE, "--max-seconds", "3", "--seed", "7"];
     let mut args = base.to_vec();
     args.extend(["--planner-params", file.to_str().unwrap()]);
-    let slow = same_in_both_modes(&args, "cli-test-planner-params");
-    let built_in_dir = out_dir("planner-params-built-in");
-    let built_in = run_ok(&base, &built_in_dir);
-    assert_ne!(digest(&slow), digest(&built_in), "the file changed nothing");
-    let slow_dir = out_dir("planner-params-slow");
     run_ok(&args, &slow_dir);
     let (v_slow, v_default) = (
         planned_top_speed(&slow_dir),
@@ -779,13 +789,7 @@ fn a_planner_parameter_file_drives_the_planner_in_both_modes() {
         ("run_speed = -1.0\n", ["run_speed", "> 0"]),
     ] {
         std::fs::write(&file, text).unwrap();
-        let o = plamo(&["--instructions", ROUTE, "--max-seconds", "1"])
-            .args(["--planner-params", file.to_str().unwrap()])
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success(), "{text}");
-        assert!(err.contains(file.to_str().unwrap()), "{err}");
+        let err = refused("--planner-params", &file);
         for n in names {
             assert!(err.contains(n), "`{n}` not in: {err}");
         }
