@@ -17,12 +17,13 @@
 //! crawl leg heads elsewhere. `PLAMO_SWEEP_HOLD=S`: the plan
 //! waits S seconds (straight paths), moving its point at rest to where the crawl's
 //! head ends after the get-down (0.7 m ahead of the standing head), so the errors measure the crawl's tracking, not
-//! the get-down's lag behind a plan that left at once.
+//! the get-down's lag behind a plan that left at once. `PLAMO_PHYSICS_PARAMS=FILE`: physics
+//! settings other than the defaults (a `--physics-params` file), for an A/B on one binary.
 use std::error::Error;
 
 use plamo_controller::{
     ArcPath, ControllerSettings, CrawlParams, GaitParams, HeadPath, MetricsSummary,
-    ModelBasedController, RisingPath, StraightPath, ceiling_scene, flat_scene, run_path,
+    ModelBasedController, RisingPath, StraightPath, ceiling_scene, flat_scene, run_path_with,
     staggered_start,
 };
 use plamo_physics::BackendKind;
@@ -66,6 +67,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         Err(_) => 0.0,
     };
     let terrains: Vec<String> = arg(6, "flat").split(',').map(String::from).collect();
+    let physics = physics_settings()?;
     for terrain in &terrains {
         for &engine in &engines {
             for &speed in &speeds {
@@ -144,8 +146,9 @@ fn main() -> Result<(), Box<dyn Error>> {
                         };
                         // A rollout the engine gives up on (rapier's body spun past
                         // 100 rad/s with some crawl gains) is counted, not fatal.
-                        run_path(
+                        run_path_with(
                             engine,
+                            &physics,
                             &scene,
                             path.as_ref(),
                             duration,
@@ -171,6 +174,15 @@ fn main() -> Result<(), Box<dyn Error>> {
         }
     }
     Ok(())
+}
+
+/// `PLAMO_PHYSICS_PARAMS`: a TOML table of `PhysicsSettings` fields (as `plamo run
+/// --physics-params`), the rest default.
+fn physics_settings() -> Result<plamo_physics::PhysicsSettings, Box<dyn Error>> {
+    Ok(match std::env::var_os("PLAMO_PHYSICS_PARAMS") {
+        Some(p) => toml::from_str(&std::fs::read_to_string(p)?)?,
+        None => plamo_physics::PhysicsSettings::default(),
+    })
 }
 
 /// Stairs (0.12 m x 0.42 m, the random scenes' steps) rising towards `angle` degrees
@@ -333,7 +345,7 @@ fn trace(
     settings: &ControllerSettings,
 ) -> Result<(), Box<dyn Error>> {
     use plamo_controller::{Action, Observation, control_step};
-    use plamo_physics::{HumanoidPose, PhysicsSettings, create_backend};
+    use plamo_physics::{HumanoidPose, create_backend};
     let crawl = match std::env::var_os("PLAMO_CRAWL_PARAMS") {
         Some(p) => CrawlParams::load(std::path::Path::new(&p))?,
         None => CrawlParams::default(),
@@ -392,7 +404,7 @@ fn trace(
                 .unwrap_or(f64::INFINITY),
         }),
     };
-    let mut physics = create_backend(engine, &scene, &PhysicsSettings::default())?;
+    let mut physics = create_backend(engine, &scene, &physics_settings()?)?;
     physics.reset(&HumanoidPose::standing_on(
         &scene.terrain,
         start[0],

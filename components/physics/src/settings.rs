@@ -43,19 +43,17 @@ pub struct PhysicsSettings {
     /// crouch-walk on the stiffer feet (BENCHMARKS.md "rapier contact compliance").
     /// Cross-backend test `pushed_standing_sway_agrees_across_backends`. Costs nothing.
     pub rapier_contact_hz: f64,
-    /// rapier: the root wrench's torque acts in its step only (default false, the
-    /// behaviour before it). rapier 0.36's `reset_forces` clears only `add_force`'s
-    /// force; `add_torque`'s torque stays until `reset_torques`, so without this every
-    /// step's root torque is added to the sum of all before it, where the trait holds
-    /// a wrench until the next call. Floating without gravity under 10 N m of yaw
-    /// torque the pelvis turns at 2.45 rad/s after 0.5 s in MuJoCo, 2.41 with this and
-    /// 30.7 without (`foot_yaw_hold free`; tests in `tests/root_torque.rs`); the
-    /// controllers' residual torque (capped at 60 N m a step) acted as its own
-    /// integral, and the crouch-walk's spin in rapier was that sum. Rapier tours (80)
-    /// with it: success 22 -> 30, crouch-walk falls 78 -> 18, but crawl falls 19 -> 59,
-    /// and two rapier crawl tests of plamo-controller (arc, ceiling) fail: the crawl was
-    /// tuned against the sum. Off until the crawl is re-tuned with it. RESULTS.md
-    /// "Rapier's root torque was summed over the steps (session 13)".
+    /// rapier: the root wrench's torque acts in its step only (default true; false
+    /// is the behaviour before session 14, kept to replay older figures). rapier
+    /// 0.36's `reset_forces` clears only `add_force`'s force; `add_torque`'s torque
+    /// stays until `reset_torques`, so with false every step's root torque is added to
+    /// the sum of all before it, where the trait holds a wrench until the next call.
+    /// Floating without gravity under 10 N m of yaw torque the pelvis turns at 2.45
+    /// rad/s after 0.5 s in MuJoCo, 2.41 with this and 30.7 without (`foot_yaw_hold
+    /// free`; tests in `tests/root_torque.rs`); the controllers' residual torque
+    /// (capped at 60 N m a step) acted as its own integral, and the crouch-walk's spin
+    /// in rapier was that sum. RESULTS.md "Rapier's root torque was summed over the
+    /// steps (session 13)" and "the crawl under the torque per step (session 14)".
     pub rapier_root_torque_per_step: bool,
     /// MuJoCo: maximum constraint-solver (Newton) iterations per step (default 50;
     /// MuJoCo's own default is 100, it converges in a few).
@@ -79,7 +77,7 @@ impl Default for PhysicsSettings {
             friction: 1.0,
             rapier_solver_iterations: 4,
             rapier_contact_hz: 11.0,
-            rapier_root_torque_per_step: false,
+            rapier_root_torque_per_step: true,
             mujoco_solver_iterations: 50,
             max_root_force: 2000.0,
             max_root_torque: 1000.0,
