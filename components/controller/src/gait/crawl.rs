@@ -32,6 +32,11 @@
 //!   and the high side's draw up (`roll_reach`, `roll_rate_reach`, off in the shipped
 //!   file; beyond `roll_reach_from`, on smooth ground only with
 //!   `roll_reach_smooth_only`).
+//! - With `forearms` (`params/crawl-forearms.toml`; off in the shipped file) the arms
+//!   carry the front on the forearms: each arm's contact is its elbow, the upper arm
+//!   aimed at it and the forearm laid forward along the ground (its hand end lifted
+//!   by `forearm_lift` in the swing), so the load goes down the upper arm instead of
+//!   through a bent elbow.
 //! - Getting down and up are joint-space blends over a fixed time from the joint
 //!   angles at the switch to the crawl's (or standing) pose, with the residual
 //!   wrench holding height rate and attitude.
@@ -63,6 +68,10 @@ pub const CRAWL_PARAMS_VERSION: u32 = 1;
 
 /// The built-in crawl parameter file.
 pub const DEFAULT_CRAWL_PARAMS: &str = include_str!("../../params/crawl.toml");
+
+/// The shipped crawl on forearms and knees (`params/crawl-forearms.toml`, `forearms`
+/// on): an alternative to the built-in hand-and-knee crawl.
+pub const FOREARM_CRAWL_PARAMS: &str = include_str!("../../params/crawl-forearms.toml");
 
 /// Crawl gait parameters (`params/crawl.toml`; units there and here).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -295,6 +304,23 @@ pub struct CrawlParams {
     /// ones up (MuJoCo tours, RESULTS "Crawl", session 13).
     #[serde(default)]
     pub roll_reach_smooth_only: bool,
+    /// The arms carry the front on the forearms (elbows and knees), not on the hands:
+    /// each arm's contact is its elbow, the upper arm aimed at it and the forearm laid
+    /// forward along the ground. A hand-and-knee crawl with the head at ~0.4 m bends
+    /// its elbows ~80 degrees under load, and the elbows sag 0.3 rad below their
+    /// targets (RESULTS "Crawl", session 14); on the forearms the load goes down the
+    /// upper arm. `hand_fwd`, `hand_width`, `hand_press` and `hand_lift` then place
+    /// the elbow. Off: hands and knees, as before.
+    #[serde(default)]
+    pub forearms: bool,
+    /// With `forearms`: the stance forearm's pitch below level, hand end down \[rad\]
+    /// (the hand presses on the ground).
+    #[serde(default)]
+    pub forearm_press: f64,
+    /// With `forearms`: the swinging forearm's pitch above level, hand end up \[rad\]
+    /// (the hand clears a riser ahead).
+    #[serde(default)]
+    pub forearm_lift: f64,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -374,6 +400,18 @@ impl Default for CrawlParams {
 }
 
 impl CrawlParams {
+    /// The shipped crawl on forearms and knees ([`FOREARM_CRAWL_PARAMS`]).
+    pub fn forearms() -> Self {
+        // Tested to parse and validate, as the default.
+        Self::from_toml(
+            FOREARM_CRAWL_PARAMS,
+            Path::new("<built-in crawl-forearms.toml>"),
+        )
+        .expect("built-in forearm crawl parameters are valid")
+    }
+}
+
+impl CrawlParams {
     /// Parses and validates parameters; `origin` names the source in errors.
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
         let p: CrawlParams = parse_toml(text, origin)?;
@@ -400,7 +438,9 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 64] = [
+        let ranges: [(&'static str, f64, f64, f64); 66] = [
+            ("forearm_press", self.forearm_press, -0.5, 0.5),
+            ("forearm_lift", self.forearm_lift, 0.0, 1.5),
             ("roll_reach_from", self.roll_reach_from, 0.0, 1.5),
             ("roll_reach", self.roll_reach, 0.0, 10.0),
             ("roll_rate_reach", self.roll_rate_reach, 0.0, 10.0),
@@ -512,6 +552,10 @@ const KNEE_RADIUS: f64 = 0.055;
 
 /// Height of the hand sphere's centre above the ground when the hand is down \[m\].
 const HAND_RADIUS: f64 = 0.05;
+
+/// Height of the elbow joint above the ground with the forearm down (`forearms`):
+/// the hand sphere's radius, the forearm lying level \[m\].
+const ELBOW_REST: f64 = 0.05;
 
 /// Ankle pitch target: toes pointed back along the shin as far as the joint goes
 /// \[rad\].
@@ -837,6 +881,16 @@ impl CrawlGait {
         (-obs.root_rotation[2]).clamp(-1.0, 1.0).asin()
     }
 
+    /// Height of an arm's contact point (hand centre, or elbow with `forearms`) above
+    /// the ground when it is down \[m\].
+    fn arm_rest(&self) -> f64 {
+        if self.params.forearms {
+            ELBOW_REST
+        } else {
+            HAND_RADIUS
+        }
+    }
+
     /// The desired body frame: `pelvis_pitch`, less the share `slope_pitch` of the
     /// ground's rise.
     fn frame(&self, ground: &Ground) -> Frame {
@@ -889,7 +943,7 @@ impl CrawlGait {
         let hand = [
             p.hand_fwd,
             0.0,
-            HAND_RADIUS - pelvis_height - shoulder[0][2],
+            self.arm_rest() - pelvis_height - shoulder[0][2],
         ];
         Frame {
             pelvis_pitch,
@@ -920,6 +974,7 @@ impl CrawlGait {
         f: &Frame,
         contacts: &[[f64; 3]; LIMBS],
         hand_force: [f64; 2],
+        arm_swing: [bool; 2],
         targets: &mut [f64],
     ) {
         let j = &self.joints;
@@ -945,6 +1000,30 @@ impl CrawlGait {
                 f.shoulder[arm],
             );
             let local = rot_y(-f.torso_pitch, rel);
+            if p.forearms {
+                // The upper arm aimed at the elbow's contact, the forearm laid forward:
+                // its pitch in the world is the upper arm's plus the elbow's.
+                let mut q = limb_ik(g.upper_arm, 0.0, -1.0, f.arm_up, local);
+                // An arm aimed up and forward in the torso frame: the shoulder's
+                // range is [-3, 1], not the angle's (-pi, pi].
+                if q[1] > 1.0 {
+                    q[1] -= 2.0 * PI;
+                }
+                let force = rot_y(-f.torso_pitch, [0.0, 0.0, hand_force[arm]]);
+                let torque = -(local[2] * force[0] - local[0] * force[2]);
+                let sh = j.shoulder[arm][1];
+                let jd = &JOINTS[sh];
+                let forearm = if arm_swing[arm] {
+                    p.forearm_lift
+                } else {
+                    -p.forearm_press
+                };
+                targets[j.shoulder[arm][0]] = q[0];
+                targets[sh] = q[1] + torque.clamp(-jd.max_torque, jd.max_torque) / jd.kp;
+                targets[j.shoulder[arm][2]] = 0.0;
+                targets[j.elbow[arm]] = -FRAC_PI_2 - forearm - (f.torso_pitch + q[1]);
+                continue;
+            }
             let q = limb_ik(g.upper_arm, g.forearm, -1.0, f.arm_up, local);
             // Gravity feed-forward: the torque that holds the hand's share of the
             // weight, realised as a PD offset (a bent arm sags by load / kp otherwise).
@@ -1009,7 +1088,7 @@ impl CrawlGait {
             let rest = if i < 2 {
                 KNEE_RADIUS - p.knee_press
             } else {
-                HAND_RADIUS - p.hand_press
+                self.arm_rest() - p.hand_press
             };
             [x, y, ground.at(x, y) + rest]
         })
@@ -1075,7 +1154,7 @@ impl CrawlGait {
                     hand[0] += p.down_reach * vx.max(0.0);
                 }
                 let contacts = self.grounded(&ground, &reach);
-                self.pose_targets(&f, &contacts, [0.0; 2], &mut crawl);
+                self.pose_targets(&f, &contacts, [0.0; 2], [false; 2], &mut crawl);
                 self.through_squat(false, &self.from, &crawl, t / p.down_time, targets);
                 let t = t + CONTROL_DT;
                 self.mode = if t >= p.down_time {
@@ -1199,9 +1278,9 @@ impl CrawlGait {
                             nominal[i][0] + self.lift_off[i][0],
                             nominal[i][1] + self.lift_off[i][1],
                         ];
-                        let mut over = ground
-                            .at(x0, y0)
-                            .max(contacts[i][2] - if i < 2 { KNEE_RADIUS } else { HAND_RADIUS });
+                        let mut over = ground.at(x0, y0).max(
+                            contacts[i][2] - if i < 2 { KNEE_RADIUS } else { self.arm_rest() },
+                        );
                         if p.swing_ahead {
                             over = over.max(ground.with_plan(land_xy[i][0], land_xy[i][1]));
                         }
@@ -1243,7 +1322,8 @@ impl CrawlGait {
                 }
                 let load = 0.5 * p.hand_load * self.settings.body_mass * GRAVITY;
                 let hand_force = [2, 3].map(|i| if self.in_swing[i] { 0.0 } else { load });
-                self.pose_targets(&f, &contacts, hand_force, targets);
+                let arm_swing = [self.in_swing[2], self.in_swing[3]];
+                self.pose_targets(&f, &contacts, hand_force, arm_swing, targets);
                 (self.v_cmd, f.pelvis_pitch, f.pelvis_height, yaw_rate)
             }
         };
@@ -1331,6 +1411,61 @@ mod tests {
         assert!(bad.validate().is_err());
         let text = DEFAULT_CRAWL_PARAMS.replace("duty", "dutty");
         assert!(CrawlParams::from_toml(&text, Path::new("x")).is_err());
+    }
+
+    #[test]
+    fn the_forearm_crawl_validates_and_lays_its_forearms_along_the_ground() {
+        // No gravity feed-forward, so the shoulder's target is the IK's alone.
+        let p = CrawlParams {
+            hand_load: 0.0,
+            ..CrawlParams::forearms()
+        };
+        assert!(p.forearms);
+        let mut obs = crawling_obs();
+        for i in 0..NUM_WAYPOINTS {
+            obs.waypoints[i] = [(i + 1) as f64 * WAYPOINT_SPACING * 0.5, 0.0, 0.0];
+            obs.waypoint_speeds[i] = 0.5;
+        }
+        let mut gait = CrawlGait::new(p, ControllerSettings::default());
+        gait.reset();
+        let j = Joints::resolve();
+        let mut out = Action::default();
+        let mut seen = [[false; 2]; 2];
+        for _ in 0..(3.0 / CONTROL_DT) as usize {
+            gait.act(&obs, &mut out);
+            for arm in 0..2 {
+                // The forearm's pitch in the world: the desired torso's, the
+                // shoulder's and the elbow's; -pi/2 lies it forward, level.
+                let pitch = p.pelvis_pitch
+                    + p.spine_pitch
+                    + out.pd_targets[j.shoulder[arm][1]]
+                    + out.pd_targets[j.elbow[arm]];
+                let swing = gait.in_swing[2 + arm];
+                let want = if swing {
+                    -FRAC_PI_2 - p.forearm_lift
+                } else {
+                    -FRAC_PI_2 + p.forearm_press
+                };
+                assert!((pitch - want).abs() < 1e-9, "arm {arm}: {pitch} vs {want}");
+                seen[arm][swing as usize] = true;
+            }
+        }
+        assert_eq!(seen, [[true; 2]; 2], "each arm both in stance and in swing");
+        // Off, the same posture's arms reach for their hands: other elbow targets.
+        let mut elbows = |p: CrawlParams| {
+            let mut gait = CrawlGait::new(p, ControllerSettings::default());
+            gait.reset();
+            gait.act(&obs, &mut out);
+            [0, 1].map(|a| out.pd_targets[j.elbow[a]])
+        };
+        let (on, off) = (
+            elbows(p),
+            elbows(CrawlParams {
+                forearms: false,
+                ..p
+            }),
+        );
+        assert!((on[0] - off[0]).abs() > 0.1, "{on:?} vs {off:?}");
     }
 
     /// A settled crawl asked for 1 m/s straight ahead over a height map; the speed it
