@@ -1,5 +1,6 @@
 //! `plamo tune` through the built binary: the crawl writes a crawl parameter file the
-//! controller loads, and bad combinations are refused by name.
+//! controller loads (its rollouts under a physics parameter file), and bad
+//! combinations are refused by name.
 
 mod support;
 
@@ -17,6 +18,9 @@ fn plamo(args: &[&str]) -> Output {
 fn tuning_the_crawl_writes_a_crawl_file_that_loads() {
     let dir = support::out_dir("tune", "crawl");
     let out = dir.join("crawl.toml");
+    // The rollouts' physics from a file; the header records it.
+    let physics = dir.join("physics.toml");
+    std::fs::write(&physics, "friction = 0.9\n").unwrap();
     let o = plamo(&[
         "--form",
         "crawl",
@@ -28,6 +32,8 @@ fn tuning_the_crawl_writes_a_crawl_file_that_loads() {
         "1",
         "--physics",
         "rapier",
+        "--physics-params",
+        physics.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -38,6 +44,7 @@ fn tuning_the_crawl_writes_a_crawl_file_that_loads() {
         text.contains("plamo tune --form crawl --budget 1"),
         "{text}"
     );
+    assert!(text.contains("--physics-params"), "{text}");
     plamo_controller::CrawlParams::load(&out).unwrap();
     // Not a terminal: progress comes as one log line per generation.
     let log = String::from_utf8_lossy(&o.stderr);
@@ -46,8 +53,13 @@ fn tuning_the_crawl_writes_a_crawl_file_that_loads() {
 
 #[test]
 fn bad_tuning_arguments_are_refused_by_name() {
-    let cases: [(&[&str], &str); 3] = [
+    let dir = support::out_dir("tune", "bad-physics");
+    let bad = dir.join("physics.toml");
+    std::fs::write(&bad, "frction = 0.5\n").unwrap();
+    let bad = bad.to_str().unwrap();
+    let cases: [(&[&str], &str); 4] = [
         (&["--form", "hop"], "walk, run, crouch, crawl"),
+        (&["--physics-params", bad, "--budget", "1"], "frction"),
         (
             &["--form", "crawl", "--start-like", "walk"],
             "start-like works",

@@ -8,14 +8,15 @@ mod cmaes;
 
 use rayon::prelude::*;
 
-use plamo_physics::{BackendKind, PhysicsError};
+use plamo_physics::{BackendKind, PhysicsError, PhysicsSettings};
 
 pub use cmaes::{Rng, Sample, SepCmaEs};
 
 use crate::error::{ControllerError, Result};
 use crate::gait::{CrawlParams, FormParams, GaitParams, ModelBasedController};
 use crate::rollout::{
-    ArcPath, HeadPath, RampedPath, START_ACCEL, StraightPath, ceiling_scene, flat_scene, run_path,
+    ArcPath, HeadPath, RampedPath, START_ACCEL, StraightPath, ceiling_scene, flat_scene,
+    run_path_with,
 };
 use crate::settings::ControllerSettings;
 
@@ -300,6 +301,9 @@ pub struct TuneSettings {
     pub sigma0: f64,
     /// Controller settings (residual caps) used in the rollouts.
     pub controller: ControllerSettings,
+    /// Physics settings of every rollout (friction, solver, contacts; the defaults
+    /// unless a study tunes under others).
+    pub physics: PhysicsSettings,
     /// Ground of the rollouts, assigned round-robin: `flat`, `ceiling` (flat under a
     /// 0.6 m ceiling, for the crawl), `arc` (a turn on flat ground, left and right
     /// alternately; its cost counts the heading too) or the name of a built-in terrain strip without
@@ -446,8 +450,9 @@ fn evaluate_on(
                     accel: START_ACCEL,
                 })
             };
-            let m = match run_path(
+            let m = match run_path_with(
                 backend,
+                &s.physics,
                 scene,
                 path.as_ref(),
                 s.duration,

@@ -22,6 +22,7 @@ fn settings(form: Form, seed: u64, terrain: &str) -> TuneSettings {
             ..Default::default()
         },
         // A terrain strip, so the scenario's ground comes from the built-in scenes.
+        physics: Default::default(),
         terrains: vec![terrain.into()],
     }
 }
@@ -63,6 +64,26 @@ fn crawl_tuning_is_deterministic_and_writes_a_crawl_file() {
     assert_eq!(
         (tuned.pelvis_pitch, tuned.spine_pitch, tuned.down_time),
         (d.pelvis_pitch, d.spine_pitch, d.down_time)
+    );
+}
+
+#[test]
+fn the_rollouts_run_under_the_given_physics() {
+    // The same seed under half the ground friction: the rollouts, so the cost, change.
+    let base = settings(Form::Walk, 3, "flat");
+    let slippery = TuneSettings {
+        physics: plamo_physics::PhysicsSettings {
+            friction: 0.5 * base.physics.friction,
+            ..base.physics.clone()
+        },
+        ..base.clone()
+    };
+    let (_, a) = tune(&TunedParams::default(), &base, |_| {}).unwrap();
+    let (_, b) = tune(&TunedParams::default(), &slippery, |_| {}).unwrap();
+    assert_ne!(
+        a.total.to_bits(),
+        b.total.to_bits(),
+        "friction changed nothing"
     );
 }
 
