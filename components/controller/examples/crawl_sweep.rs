@@ -7,7 +7,8 @@
 //! [terrains: flat,slope,rough,stairs,ceiling]` (the sloped, rough and stair strips
 //! are the builtin `terrain-*` scenes `plamo eval locomotion` uses, from x 5, y 3;
 //! `ceiling` is flat with the crawl suite's 0.6 m ceiling; `stairs@A`: 0.12 m x 0.42 m
-//! stairs rising towards A degrees from the path, from x 5, y 6). `drop`: the plan walks at
+//! stairs rising towards A degrees from the path, from x 5, y 6; `ledge@H`: a ledge H m
+//! up across the path at x 4, from x 0, y 6). `drop`: the plan walks at
 //! the given speed (head 1.47 m, from rest at 1 m/s^2) and drops to the crawl's head
 //! height and 1 m/s at 4 s, the get-down from a walk. `rise`: straight, the plan rises
 //! to a standing head at 5 s (the get-up; a crawler still down counts as fallen).
@@ -86,6 +87,8 @@ fn main() -> Result<(), Box<dyn Error>> {
                             (ceiling_scene(speed * duration + 10.0), [0.0, 0.0])
                         } else if let Some(angle) = terrain.strip_prefix("stairs@") {
                             (oblique_stairs(angle.parse().unwrap()), [5.0, 6.0])
+                        } else if let Some(h) = terrain.strip_prefix("ledge@") {
+                            (ledge(h.parse().unwrap()), [0.0, 6.0])
                         } else {
                             (
                                 plamo_scenes::builtin(&format!("terrain-{terrain}")).unwrap(),
@@ -197,6 +200,19 @@ fn oblique_stairs(angle: f64) -> plamo_scenes::Scene {
          direction_deg = {angle}, symmetric = true }}\n"
     );
     plamo_scenes::from_toml_str(&text, "oblique stairs").unwrap()
+}
+
+/// Flat ground with a ledge `height` \[m\] up across the path at x = 4 m: a random
+/// scene's slope or stair tile seen from its side, where the planner crosses steps up
+/// to its `max_step_height`.
+fn ledge(height: f64) -> plamo_scenes::Scene {
+    let text = format!(
+        "name = \"ledge-{height}\"\ndescription = \"a {height} m ledge at x 4 m\"\n\
+         [terrain]\nsize = [40.0, 12.0]\n[[terrain.tiles]]\n\
+         area = {{ min = [4.0, 0.0], max = [40.0, 12.0] }}\n\
+         generator = {{ kind = \"flat\", height = {height} }}\n"
+    );
+    plamo_scenes::from_toml_str(&text, "ledge").unwrap()
 }
 
 /// A straight plan that waits `hold` seconds at its start, moving its point (at rest)
@@ -355,6 +371,7 @@ fn trace(
     let (scene, origin) = match std::env::var("PLAMO_TRACE_TERRAIN") {
         Ok(t) if t == "ceiling" => (ceiling_scene(speed * duration + 10.0), [0.0, 0.0]),
         Ok(t) if t.starts_with("stairs@") => (oblique_stairs(t[7..].parse()?), [5.0, 6.0]),
+        Ok(t) if t.starts_with("ledge@") => (ledge(t[6..].parse()?), [0.0, 6.0]),
         Ok(t) if t != "flat" => (plamo_scenes::builtin(&format!("terrain-{t}"))?, [5.0, 3.0]),
         _ => (flat_scene(speed * duration + 10.0), [0.0, 0.0]),
     };
