@@ -20,6 +20,7 @@
 //! head ends after the get-down (0.7 m ahead of the standing head), so the errors measure the crawl's tracking, not
 //! the get-down's lag behind a plan that left at once. `PLAMO_PHYSICS_PARAMS=FILE`: physics
 //! settings other than the defaults (a `--physics-params` file), for an A/B on one binary.
+//! In `trace`, `PLAMO_TRACE_CONTACTS=1` lists the bodies touching the terrain.
 use std::error::Error;
 
 use plamo_controller::{
@@ -519,6 +520,17 @@ fn trace(
                 w.torque[2],
                 policy.is_crawling(),
             );
+            if std::env::var_os("PLAMO_TRACE_CONTACTS").is_some() {
+                let touching: Vec<&str> = (0..plamo_physics::NUM_BODIES)
+                    .filter(|&i| state.terrain_contact[i])
+                    .map(|i| plamo_physics::BODY_NAMES[i])
+                    .collect();
+                println!(
+                    "  x {:5.2} touching {}",
+                    state.root_position[0],
+                    touching.join(" ")
+                );
+            }
         }
     }
     Ok(())
