@@ -1001,6 +1001,16 @@ impl CrawlGait {
                 f.shoulder[arm],
             );
             let local = rot_y(-f.torso_pitch, rel);
+            // Gravity feed-forward: the torque that holds the contact's share of the
+            // weight, realised as a PD offset (a bent arm sags by load / kp otherwise).
+            let force = rot_y(-f.torso_pitch, [0.0, 0.0, hand_force[arm]]);
+            let hold = |joint: usize, r: [f64; 3]| {
+                let torque = -(r[2] * force[0] - r[0] * force[2]);
+                let jd = &JOINTS[joint];
+                torque.clamp(-jd.max_torque, jd.max_torque) / jd.kp
+            };
+            let sh = j.shoulder[arm][1];
+            targets[j.shoulder[arm][2]] = 0.0;
             if p.forearms {
                 // The upper arm aimed at the elbow's contact, the forearm laid forward:
                 // its pitch in the world is the upper arm's plus the elbow's.
@@ -1010,36 +1020,21 @@ impl CrawlGait {
                 if q[1] > 1.0 {
                     q[1] -= 2.0 * PI;
                 }
-                let force = rot_y(-f.torso_pitch, [0.0, 0.0, hand_force[arm]]);
-                let torque = -(local[2] * force[0] - local[0] * force[2]);
-                let sh = j.shoulder[arm][1];
-                let jd = &JOINTS[sh];
                 let forearm = if arm_swing[arm] {
                     p.forearm_lift
                 } else {
                     -p.forearm_press
                 };
                 targets[j.shoulder[arm][0]] = q[0];
-                targets[sh] = q[1] + torque.clamp(-jd.max_torque, jd.max_torque) / jd.kp;
-                targets[j.shoulder[arm][2]] = 0.0;
+                targets[sh] = q[1] + hold(sh, local);
                 targets[j.elbow[arm]] = -FRAC_PI_2 - forearm - (f.torso_pitch + q[1]);
-                continue;
+            } else {
+                let q = limb_ik(g.upper_arm, g.forearm, -1.0, f.arm_up, local);
+                let elbow = [-g.upper_arm * q[1].sin(), 0.0, -g.upper_arm * q[1].cos()];
+                targets[j.shoulder[arm][0]] = q[0];
+                targets[sh] = q[1] + hold(sh, local);
+                targets[j.elbow[arm]] = q[2] + hold(j.elbow[arm], sub3(local, elbow));
             }
-            let q = limb_ik(g.upper_arm, g.forearm, -1.0, f.arm_up, local);
-            // Gravity feed-forward: the torque that holds the hand's share of the
-            // weight, realised as a PD offset (a bent arm sags by load / kp otherwise).
-            let force = rot_y(-f.torso_pitch, [0.0, 0.0, hand_force[arm]]);
-            let elbow = [-g.upper_arm * q[1].sin(), 0.0, -g.upper_arm * q[1].cos()];
-            let hold = |joint: usize, r: [f64; 3]| {
-                let torque = -(r[2] * force[0] - r[0] * force[2]);
-                let jd = &JOINTS[joint];
-                torque.clamp(-jd.max_torque, jd.max_torque) / jd.kp
-            };
-            let sh = j.shoulder[arm][1];
-            targets[j.shoulder[arm][0]] = q[0];
-            targets[sh] = q[1] + hold(sh, local);
-            targets[j.shoulder[arm][2]] = 0.0;
-            targets[j.elbow[arm]] = q[2] + hold(j.elbow[arm], sub3(local, elbow));
         }
         targets[j.spine_y] = p.spine_pitch;
         targets[j.neck_y] = p.neck_pitch;
@@ -1434,7 +1429,7 @@ mod tests {
         let mut seen = [[false; 2]; 2];
         for _ in 0..(3.0 / CONTROL_DT) as usize {
             gait.act(&obs, &mut out);
-            for arm in 0..2 {
+            for (arm, seen) in seen.iter_mut().enumerate() {
                 // The forearm's pitch in the world: the desired torso's, the
                 // shoulder's and the elbow's; -pi/2 lies it forward, level.
                 let pitch = p.pelvis_pitch
@@ -1448,7 +1443,7 @@ mod tests {
                     -FRAC_PI_2 + p.forearm_press
                 };
                 assert!((pitch - want).abs() < 1e-9, "arm {arm}: {pitch} vs {want}");
-                seen[arm][swing as usize] = true;
+                seen[swing as usize] = true;
             }
         }
         assert_eq!(seen, [[true; 2]; 2], "each arm both in stance and in swing");
