@@ -360,7 +360,7 @@ const TERRAIN_FALLS: u32 = 6;
 /// (`crawl_sweep` with `PLAMO_CRAWL_PARAMS=params/crawl-forearms.toml`, 16 runs per
 /// cell: 0 on gravel and stairs at 0.5 and 1 m/s, against the hand crawl's 12). On the
 /// stairs part of that is stalling: the forearm crawl stops at the first riser, its
-/// knees against it (RESULTS.md "Crawl", session 15).
+/// thighs on the edge (RESULTS.md "Crawl", session 15).
 #[cfg(feature = "mujoco")]
 const FOREARM_TERRAIN_FALLS: u32 = 1;
 

@@ -37,7 +37,7 @@
 //!   aimed at it and the forearm laid forward along the ground (its hand end lifted
 //!   by `forearm_lift` in the swing), so the load goes down the upper arm instead of
 //!   through a bent elbow. It falls less but does not climb: at a riser of 0.1 m or
-//!   more its knees stop against the face.
+//!   more it stalls, its thighs on the edge.
 //! - Getting down and up are joint-space blends over a fixed time from the joint
 //!   angles at the switch to the crawl's (or standing) pose, with the residual
 //!   wrench holding height rate and attitude.
