@@ -132,6 +132,12 @@ pub fn load_physics_settings(path: &Path) -> Result<PhysicsSettings, String> {
     Ok(settings)
 }
 
+/// The physics settings of an optional `--physics-params` file: the file's, or the
+/// defaults without one.
+pub fn physics_settings_or_default(path: Option<&Path>) -> Result<PhysicsSettings, String> {
+    path.map_or_else(|| Ok(PhysicsSettings::default()), load_physics_settings)
+}
+
 /// Where a humanoid starts in `region`: its centre, or where the centre has no room
 /// to stand (a low top over it, a wall beside it) the nearest spot of the region
 /// that has, searched on rings [`START_SEARCH_STEP`] apart. A body spawned standing
@@ -263,10 +269,7 @@ impl RunSpec {
 
     /// The physics settings: the spec's file, or the defaults.
     pub fn physics_settings(&self) -> Result<PhysicsSettings, RunError> {
-        match &self.params.physics {
-            Some(f) => load_physics_settings(f).map_err(RunError::Setup),
-            None => Ok(PhysicsSettings::default()),
-        }
+        physics_settings_or_default(self.params.physics.as_deref()).map_err(RunError::Setup)
     }
 
     /// The physics world with every agent at its start, with the spec's settings.

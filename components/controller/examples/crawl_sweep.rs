@@ -82,20 +82,8 @@ fn main() -> Result<(), Box<dyn Error>> {
                             settings.clone(),
                         )
                         .unwrap();
-                        let (scene, origin) = if terrain == "flat" {
-                            (flat_scene(speed * duration + 10.0), [0.0, 0.0])
-                        } else if terrain == "ceiling" {
-                            (ceiling_scene(speed * duration + 10.0), [0.0, 0.0])
-                        } else if let Some(angle) = terrain.strip_prefix("stairs@") {
-                            (oblique_stairs(angle.parse().unwrap()), [5.0, 6.0])
-                        } else if let Some(h) = terrain.strip_prefix("ledge@") {
-                            (ledge(h.parse().unwrap()), [0.0, 6.0])
-                        } else {
-                            (
-                                plamo_scenes::builtin(&format!("terrain-{terrain}")).unwrap(),
-                                [5.0, 3.0],
-                            )
-                        };
+                        let (scene, origin) =
+                            terrain_scene(terrain, speed * duration + 10.0).unwrap();
                         let start = staggered_start(origin, r);
                         let path: Box<dyn HeadPath> = if drop {
                             Box::new(DropPath {
@@ -201,6 +189,28 @@ fn oblique_stairs(angle: f64) -> plamo_scenes::Scene {
          direction_deg = {angle}, symmetric = true }}\n"
     );
     plamo_scenes::from_toml_str(&text, "oblique stairs").unwrap()
+}
+
+/// The scene of a terrain name (see the module docs) and where its runs start; flat
+/// ground and the ceiling are `length` \[m\] long.
+fn terrain_scene(
+    terrain: &str,
+    length: f64,
+) -> Result<(plamo_scenes::Scene, [f64; 2]), Box<dyn Error>> {
+    Ok(if terrain == "flat" {
+        (flat_scene(length), [0.0, 0.0])
+    } else if terrain == "ceiling" {
+        (ceiling_scene(length), [0.0, 0.0])
+    } else if let Some(angle) = terrain.strip_prefix("stairs@") {
+        (oblique_stairs(angle.parse()?), [5.0, 6.0])
+    } else if let Some(h) = terrain.strip_prefix("ledge@") {
+        (ledge(h.parse()?), [0.0, 6.0])
+    } else {
+        (
+            plamo_scenes::builtin(&format!("terrain-{terrain}"))?,
+            [5.0, 3.0],
+        )
+    })
 }
 
 /// Flat ground with a ledge `height` \[m\] up across the path at x = 4 m: a random
@@ -369,13 +379,8 @@ fn trace(
     };
     let mut policy =
         ModelBasedController::with_all_params(GaitParams::default(), crawl, settings.clone())?;
-    let (scene, origin) = match std::env::var("PLAMO_TRACE_TERRAIN") {
-        Ok(t) if t == "ceiling" => (ceiling_scene(speed * duration + 10.0), [0.0, 0.0]),
-        Ok(t) if t.starts_with("stairs@") => (oblique_stairs(t[7..].parse()?), [5.0, 6.0]),
-        Ok(t) if t.starts_with("ledge@") => (ledge(t[6..].parse()?), [0.0, 6.0]),
-        Ok(t) if t != "flat" => (plamo_scenes::builtin(&format!("terrain-{t}"))?, [5.0, 3.0]),
-        _ => (flat_scene(speed * duration + 10.0), [0.0, 0.0]),
-    };
+    let terrain = std::env::var("PLAMO_TRACE_TERRAIN").unwrap_or_else(|_| "flat".into());
+    let (scene, origin) = terrain_scene(&terrain, speed * duration + 10.0)?;
     // Start offsets as in the sweep's run `PLAMO_TRACE_RUN` (default 0).
     let r: usize = std::env::var("PLAMO_TRACE_RUN")
         .ok()

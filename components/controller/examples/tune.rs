@@ -30,8 +30,8 @@ fn main() -> Result<(), Box<dyn Error>> {
             body_mass: plamo_physics::humanoid::total_mass(),
             ..Default::default()
         },
-        // PLAMO_TUNE_TERRAINS=flat,rough,stairs tunes on terrain strips too.
         physics: Default::default(),
+        // PLAMO_TUNE_TERRAINS=flat,rough,stairs tunes on terrain strips too.
         terrains: std::env::var("PLAMO_TUNE_TERRAINS")
             .unwrap_or_else(|_| "flat".into())
             .split(',')

@@ -21,8 +21,8 @@ fn settings(form: Form, seed: u64, terrain: &str) -> TuneSettings {
             body_mass: plamo_physics::humanoid::total_mass(),
             ..Default::default()
         },
-        // A terrain strip, so the scenario's ground comes from the built-in scenes.
         physics: Default::default(),
+        // A terrain strip, so the scenario's ground comes from the built-in scenes.
         terrains: vec![terrain.into()],
     }
 }

@@ -24,7 +24,7 @@ use plamo_controller::{
     ControllerSettings, MetricsSummary, ModelBasedController, RUN_STAGGER, RampedPath, START_ACCEL,
     STRIP_LENGTH, StraightPath, run_path_with, staggered_start, terrain_scene,
 };
-use plamo_physics::{BackendKind, PhysicsSettings};
+use plamo_physics::BackendKind;
 use plamo_scenes::Scene;
 use plotters::prelude::*;
 use rayon::prelude::*;
@@ -293,10 +293,8 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
         .map_err(|e| anyhow::anyhow!("--physics: {e}"))?;
     let params = ControllerParams::load(a.gait_params.as_deref(), a.crawl_params.as_deref())
         .map_err(anyhow::Error::msg)?;
-    let physics_settings = match &a.physics_params {
-        Some(f) => plamo::spec::load_physics_settings(f).map_err(anyhow::Error::msg)?,
-        None => PhysicsSettings::default(),
-    };
+    let physics_settings = plamo::spec::physics_settings_or_default(a.physics_params.as_deref())
+        .map_err(anyhow::Error::msg)?;
     let settings = ControllerSettings {
         body_mass: plamo_physics::humanoid::total_mass(),
         ..Default::default()

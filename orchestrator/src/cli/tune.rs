@@ -84,10 +84,8 @@ pub fn run(args: TuneArgs) -> anyhow::Result<ExitCode> {
             "gait.toml"
         })
     });
-    let physics = match &args.physics_params {
-        Some(f) => plamo::spec::load_physics_settings(f).map_err(anyhow::Error::msg)?,
-        None => Default::default(),
-    };
+    let physics = plamo::spec::physics_settings_or_default(args.physics_params.as_deref())
+        .map_err(anyhow::Error::msg)?;
     let settings = TuneSettings {
         form,
         generations: args.budget,

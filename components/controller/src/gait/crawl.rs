@@ -410,9 +410,7 @@ impl CrawlParams {
         )
         .expect("built-in forearm crawl parameters are valid")
     }
-}
 
-impl CrawlParams {
     /// Parses and validates parameters; `origin` names the source in errors.
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
         let p: CrawlParams = parse_toml(text, origin)?;
