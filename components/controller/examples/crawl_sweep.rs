@@ -8,7 +8,7 @@
 //! are the builtin `terrain-*` scenes `plamo eval locomotion` uses, from x 5, y 3;
 //! `ceiling` is flat with the crawl suite's 0.6 m ceiling; `stairs@A`: 0.12 m x 0.42 m
 //! stairs rising towards A degrees from the path, from x 5, y 6; `ledge@H`: a ledge H m
-//! up across the path at x 4, from x 0, y 6). `drop`: the plan walks at
+//! up across the path at x 4, from x 0, `ledge_scene`). `drop`: the plan walks at
 //! the given speed (head 1.47 m, from rest at 1 m/s^2) and drops to the crawl's head
 //! height and 1 m/s at 4 s, the get-down from a walk. `rise`: straight, the plan rises
 //! to a standing head at 5 s (the get-up; a crawler still down counts as fallen).
@@ -25,8 +25,8 @@ use std::error::Error;
 
 use plamo_controller::{
     ArcPath, ControllerSettings, CrawlParams, GaitParams, HeadPath, MetricsSummary,
-    ModelBasedController, RisingPath, StraightPath, ceiling_scene, flat_scene, run_path_with,
-    staggered_start,
+    ModelBasedController, RisingPath, StraightPath, ceiling_scene, flat_scene, ledge_scene,
+    run_path_with, staggered_start,
 };
 use plamo_physics::BackendKind;
 use rayon::prelude::*;
@@ -204,26 +204,13 @@ fn terrain_scene(
     } else if let Some(angle) = terrain.strip_prefix("stairs@") {
         (oblique_stairs(angle.parse()?), [5.0, 6.0])
     } else if let Some(h) = terrain.strip_prefix("ledge@") {
-        (ledge(h.parse()?), [0.0, 6.0])
+        (ledge_scene(length, h.parse()?), [0.0, 0.0])
     } else {
         (
             plamo_scenes::builtin(&format!("terrain-{terrain}"))?,
             [5.0, 3.0],
         )
     })
-}
-
-/// Flat ground with a ledge `height` \[m\] up across the path at x = 4 m: a random
-/// scene's slope or stair tile seen from its side, where the planner crosses steps up
-/// to its `max_step_height`.
-fn ledge(height: f64) -> plamo_scenes::Scene {
-    let text = format!(
-        "name = \"ledge-{height}\"\ndescription = \"a {height} m ledge at x 4 m\"\n\
-         [terrain]\nsize = [40.0, 12.0]\n[[terrain.tiles]]\n\
-         area = {{ min = [4.0, 0.0], max = [40.0, 12.0] }}\n\
-         generator = {{ kind = \"flat\", height = {height} }}\n"
-    );
-    plamo_scenes::from_toml_str(&text, "ledge").unwrap()
 }
 
 /// A straight plan that waits `hold` seconds at its start, moving its point (at rest)

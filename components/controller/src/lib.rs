@@ -38,8 +38,8 @@ pub use onnx_policy::{OnnxPolicy, PolicySidecar};
 pub use policy::{Action, Policy, RootWrench};
 pub use rollout::{
     ArcPath, HeadPath, RUN_STAGGER, RampedPath, RisingPath, START_ACCEL, STRIP_LENGTH,
-    StraightPath, TurnPath, ceiling_scene, control_step, flat_scene, run_path, run_path_with,
-    run_straight, staggered_start,
+    StraightPath, TurnPath, ceiling_scene, control_step, flat_scene, ledge_scene, run_path,
+    run_path_with, run_straight, staggered_start,
 };
 pub use settings::{ControllerSettings, GRAVITY};
 pub use tune::{

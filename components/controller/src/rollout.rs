@@ -326,6 +326,26 @@ pub fn ceiling_scene(length: f64) -> Scene {
     scene
 }
 
+/// A [`flat_scene`] with a ledge `height` \[m\] up across the path from x = 4 m on:
+/// a random scene's slope or stair tile seen from its side, where the planner lets
+/// paths cross steps up to its `max_step_height`. The bench for a crawl's step-up.
+pub fn ledge_scene(length: f64, height: f64) -> Scene {
+    let mut scene = flat_scene(length);
+    scene.name = format!("ledge-{height}");
+    let grid = &mut scene.terrain;
+    for j in 0..grid.ny {
+        for i in 0..grid.nx {
+            if grid.position(i, j)[0] >= LEDGE_AT - 1e-9 {
+                grid.heights[j * grid.nx + i] = height;
+            }
+        }
+    }
+    scene
+}
+
+/// Where [`ledge_scene`]'s ledge rises, along +X \[m\].
+pub const LEDGE_AT: f64 = 4.0;
+
 /// Length of the built-in terrain strips from where a run starts on them \[m\]
 /// (`terrain-*` scenes, x 5 -> 35 m; see [`crate::terrain_scene`]).
 pub const STRIP_LENGTH: f64 = 30.0;

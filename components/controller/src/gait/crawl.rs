@@ -36,8 +36,9 @@
 //!   carry the front on the forearms: each arm's contact is its elbow, the upper arm
 //!   aimed at it and the forearm laid forward along the ground (its hand end lifted
 //!   by `forearm_lift` in the swing), so the load goes down the upper arm instead of
-//!   through a bent elbow. It falls less but does not climb: at a riser of 0.1 m or
-//!   more it stalls, its thighs on the edge.
+//!   through a bent elbow. A swinging knee whose landing is higher steps up
+//!   (`knee_step_up`, on in that file): it clears the step by its radius and aims
+//!   its thigh from the pelvis as it is, which pitches past its target.
 //! - Getting down and up are joint-space blends over a fixed time from the joint
 //!   angles at the switch to the crawl's (or standing) pose, with the residual
 //!   wrench holding height rate and attitude.
@@ -322,6 +323,15 @@ pub struct CrawlParams {
     /// (the hand clears a riser ahead).
     #[serde(default)]
     pub forearm_lift: f64,
+    /// Rise of a swinging knee's landing ground above its lift-off ground from which
+    /// it steps up \[m\]: it clears the step by `knee_lift` with its own radius, and
+    /// where its target lies within the thigh's reach of the hip it keeps the target's
+    /// height and reaches forward with the whole thigh. The thigh is one segment aimed
+    /// at the target, so a target nearer than the thigh (a raised landing) put the knee
+    /// below it, into the riser, and the crawl stalled at a ledge with its knees against
+    /// the face (RESULTS "Crawl", session 16). 0: off.
+    #[serde(default)]
+    pub knee_step_up: f64,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -437,7 +447,8 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 66] = [
+        let ranges: [(&'static str, f64, f64, f64); 67] = [
+            ("knee_step_up", self.knee_step_up, 0.0, 0.5),
             ("forearm_press", self.forearm_press, -0.5, 0.5),
             ("forearm_lift", self.forearm_lift, 0.0, 1.5),
             ("roll_reach_from", self.roll_reach_from, 0.0, 1.5),
@@ -974,6 +985,7 @@ impl CrawlGait {
         contacts: &[[f64; 3]; LIMBS],
         hand_force: [f64; 2],
         arm_swing: [bool; 2],
+        step_up: [Option<f64>; 2],
         targets: &mut [f64],
     ) {
         let j = &self.joints;
@@ -981,8 +993,18 @@ impl CrawlGait {
         let p = &self.params;
         for leg in 0..2 {
             let knee = contacts[leg];
-            let rel = sub3([knee[0], knee[1], knee[2] - f.pelvis_height], f.hip[leg]);
-            let q = limb_ik(g.thigh, 0.0, 1.0, false, rot_y(-f.pelvis_pitch, rel));
+            let mut rel = sub3([knee[0], knee[1], knee[2] - f.pelvis_height], f.hip[leg]);
+            let mut aim_pitch = f.pelvis_pitch;
+            if let Some(pitch) = step_up[leg] {
+                // Within the thigh's reach the aimed knee would pass below the target:
+                // keep its height, reach forward. The thigh is aimed from the pelvis as
+                // it is: the crawl's pelvis pitches ~0.35 rad past its target, and a
+                // thigh aimed from the desired pelvis swung the knee into the riser.
+                let reach = (g.thigh * g.thigh - rel[1] * rel[1] - rel[2] * rel[2]).max(0.0);
+                rel[0] = rel[0].max(reach.sqrt());
+                aim_pitch = pitch;
+            }
+            let q = limb_ik(g.thigh, 0.0, 1.0, false, rot_y(-aim_pitch, rel));
             // Shin back along the ground, its foot end lifted by `shin_lift`.
             let thigh_pitch = f.pelvis_pitch + q[1];
             targets[j.hip[leg][0]] = q[0];
@@ -1148,7 +1170,7 @@ impl CrawlGait {
                     hand[0] += p.down_reach * vx.max(0.0);
                 }
                 let contacts = self.grounded(&ground, &reach);
-                self.pose_targets(&f, &contacts, [0.0; 2], [false; 2], &mut crawl);
+                self.pose_targets(&f, &contacts, [0.0; 2], [false; 2], [None; 2], &mut crawl);
                 self.through_squat(false, &self.from, &crawl, t / p.down_time, targets);
                 let t = t + CONTROL_DT;
                 self.mode = if t >= p.down_time {
@@ -1265,6 +1287,7 @@ impl CrawlGait {
                     xy[i] = [nx + self.offset[i][0], ny + self.offset[i][1]];
                 }
                 let mut contacts = self.grounded(&ground, &xy);
+                let mut step_up = [None; 2];
                 for i in 0..LIMBS {
                     if lift[i] > 0.0 {
                         // Clear the highest ground between lift-off and landing.
@@ -1272,11 +1295,19 @@ impl CrawlGait {
                             nominal[i][0] + self.lift_off[i][0],
                             nominal[i][1] + self.lift_off[i][1],
                         ];
-                        let mut over = ground.at(x0, y0).max(
-                            contacts[i][2] - if i < 2 { KNEE_RADIUS } else { self.arm_rest() },
-                        );
+                        let rest = if i < 2 { KNEE_RADIUS } else { self.arm_rest() };
+                        let start = ground.at(x0, y0);
+                        let mut over = start.max(contacts[i][2] - rest);
                         if p.swing_ahead {
                             over = over.max(ground.with_plan(land_xy[i][0], land_xy[i][1]));
+                        }
+                        if i < 2
+                            && p.knee_step_up > 0.0
+                            && ground.with_plan(land_xy[i][0], land_xy[i][1]) - start
+                                >= p.knee_step_up
+                        {
+                            step_up[i] = Some(pitch);
+                            over += rest;
                         }
                         contacts[i][2] = contacts[i][2].max(over) + lift[i];
                     }
@@ -1317,7 +1348,7 @@ impl CrawlGait {
                 let load = 0.5 * p.hand_load * self.settings.body_mass * GRAVITY;
                 let hand_force = [2, 3].map(|i| if self.in_swing[i] { 0.0 } else { load });
                 let arm_swing = [self.in_swing[2], self.in_swing[3]];
-                self.pose_targets(&f, &contacts, hand_force, arm_swing, targets);
+                self.pose_targets(&f, &contacts, hand_force, arm_swing, step_up, targets);
                 (self.v_cmd, f.pelvis_pitch, f.pelvis_height, yaw_rate)
             }
         };
@@ -1895,6 +1926,53 @@ mod tests {
         assert_eq!(arms(on, 0.0), arms(off, 0.0));
         assert_eq!(arms(off, 0.15), arms(off, 0.0));
         assert_ne!(arms(on, 0.15), arms(off, 0.15));
+    }
+
+    #[test]
+    fn a_swinging_knee_steps_up_a_ledge_only_with_knee_step_up() {
+        // A second of crawling towards a plan 0.5 m/s ahead, the map flat or with a
+        // ledge 0.1 m up from 0.2 m ahead of the root, the pelvis pitched 1 rad (its
+        // target is 0.6-0.75): the legs' hip flexion targets per step.
+        let hips = |params: CrawlParams, ledge: f64| {
+            let mut obs = crawling_obs();
+            let (s, c) = 1.0_f64.sin_cos();
+            obs.root_rotation = [c, 0.0, -s, 0.0, 1.0, 0.0];
+            fill_map(&mut obs, &|x, _| if x >= 0.2 { ledge } else { 0.0 });
+            for i in 0..NUM_WAYPOINTS {
+                obs.waypoints[i] = [0.25 * (i + 1) as f64, 0.0, 0.0];
+            }
+            obs.waypoint_speeds = [0.5; NUM_WAYPOINTS];
+            obs.waypoint_ground = [ledge; NUM_WAYPOINTS];
+            let mut gait = CrawlGait::new(params, ControllerSettings::default());
+            gait.reset();
+            let mut out = Action::default();
+            let j = gait.joints;
+            (0..(1.0 / CONTROL_DT) as usize)
+                .map(|_| {
+                    gait.act(&obs, &mut out);
+                    [0, 1].map(|l| out.pd_targets[j.hip[l][1]])
+                })
+                .collect::<Vec<_>>()
+        };
+        let most_flexed =
+            |h: &[[f64; 2]]| h.iter().flatten().copied().fold(f64::INFINITY, f64::min);
+        let off = CrawlParams::forearms();
+        assert!(off.knee_step_up > 0.0, "the forearm crawl steps up");
+        let off = CrawlParams {
+            knee_step_up: 0.0,
+            ..off
+        };
+        let on = CrawlParams::forearms();
+        assert_eq!(hips(on, 0.0), hips(off, 0.0));
+        let (up, stuck) = (hips(on, 0.1), hips(off, 0.1));
+        // Aimed from the pelvis as it is (pitched past its target) and reaching forward,
+        // the swinging thigh flexes further than one aimed from the desired pelvis.
+        assert!(
+            most_flexed(&up) < most_flexed(&stuck) - 0.2,
+            "hip flexion {} with the step-up, {} without",
+            most_flexed(&up),
+            most_flexed(&stuck)
+        );
     }
 
     #[test]
