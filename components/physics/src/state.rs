@@ -158,9 +158,14 @@ impl HumanoidPose {
     /// Standing on the scene's terrain at (x, y): the ground height is the highest
     /// terrain sample under the feet, so no foot starts inside a slope or a step.
     pub fn standing_on(terrain: &plamo_scenes::HeightGrid, x: f64, y: f64, yaw: f64) -> Self {
+        // The feet's extent along and across the heading: turned with it, or a body
+        // facing anywhere but +X sampled ground beside its feet and started with them
+        // inside a slope.
+        let (s, c) = yaw.sin_cos();
         let mut ground = f64::NEG_INFINITY;
-        for dx in [-0.1, 0.0, 0.2] {
-            for dy in [-0.15, 0.0, 0.15] {
+        for along in [-0.1, 0.0, 0.2] {
+            for across in [-0.15, 0.0, 0.15] {
+                let (dx, dy) = (c * along - s * across, s * along + c * across);
                 ground = ground.max(terrain.height_at(x + dx, y + dy));
             }
         }
@@ -380,6 +385,29 @@ pub(crate) fn sanitize_action(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn standing_on_reads_the_ground_under_the_feet_as_they_face() {
+        // A step 0.3 m up beyond y = 0.17 m: the toes of a body at the origin facing
+        // +Y (0.2 m ahead) are over it; facing +X the feet (0.15 m to each side) are
+        // not.
+        let mut grid = plamo_scenes::HeightGrid::flat([-2.0, -2.0], [4.0, 4.0], 0.05, 0.0);
+        for j in 0..grid.ny {
+            for i in 0..grid.nx {
+                if grid.position(i, j)[1] > 0.17 {
+                    grid.heights[j * grid.nx + i] = 0.3;
+                }
+            }
+        }
+        let ground = |yaw: f64| {
+            HumanoidPose::standing_on(&grid, 0.0, 0.0, yaw).root_position[2]
+                - humanoid::STANDING_PELVIS_HEIGHT
+                - 0.002
+        };
+        assert!(ground(0.0).abs() < 1e-9, "facing +X: {}", ground(0.0));
+        let up = ground(std::f64::consts::FRAC_PI_2);
+        assert!(up > 0.1, "facing +Y the toes are over the step: {up}");
+    }
 
     #[test]
     fn resting_poses_touch_the_ground_with_their_lowest_shapes() {
