@@ -161,11 +161,11 @@ impl HumanoidPose {
         // The feet's extent along and across the heading: turned with it, or a body
         // facing anywhere but +X sampled ground beside its feet and started with them
         // inside a slope.
-        let (s, c) = yaw.sin_cos();
+        let heading = math::quat_from_yaw(yaw);
         let mut ground = f64::NEG_INFINITY;
         for along in [-0.1, 0.0, 0.2] {
             for across in [-0.15, 0.0, 0.15] {
-                let (dx, dy) = (c * along - s * across, s * along + c * across);
+                let [dx, dy, _] = math::rotate(heading, [along, across, 0.0]);
                 ground = ground.max(terrain.height_at(x + dx, y + dy));
             }
         }

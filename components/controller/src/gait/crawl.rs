@@ -1297,15 +1297,12 @@ impl CrawlGait {
                         ];
                         let rest = if i < 2 { KNEE_RADIUS } else { self.arm_rest() };
                         let start = ground.at(x0, y0);
+                        let land = ground.with_plan(land_xy[i][0], land_xy[i][1]);
                         let mut over = start.max(contacts[i][2] - rest);
                         if p.swing_ahead {
-                            over = over.max(ground.with_plan(land_xy[i][0], land_xy[i][1]));
+                            over = over.max(land);
                         }
-                        if i < 2
-                            && p.knee_step_up > 0.0
-                            && ground.with_plan(land_xy[i][0], land_xy[i][1]) - start
-                                >= p.knee_step_up
-                        {
+                        if i < 2 && p.knee_step_up > 0.0 && land - start >= p.knee_step_up {
                             step_up[i] = Some(pitch);
                             over += rest;
                         }
@@ -1888,6 +1885,35 @@ mod tests {
         }
     }
 
+    /// `obs` with a plan 0.5 m/s straight ahead whose ground beyond the map is
+    /// `ground` \[m\].
+    fn with_plan_ahead(mut obs: Observation, ground: f64) -> Observation {
+        for i in 0..NUM_WAYPOINTS {
+            obs.waypoints[i] = [0.25 * (i + 1) as f64, 0.0, 0.0];
+        }
+        obs.waypoint_speeds = [0.5; NUM_WAYPOINTS];
+        obs.waypoint_ground = [ground; NUM_WAYPOINTS];
+        obs
+    }
+
+    /// A second of crawling with `params` on a fixed `obs`: `read` of each step's
+    /// targets.
+    fn a_second_of(
+        params: CrawlParams,
+        obs: &Observation,
+        read: impl Fn(&Joints, &[f64]) -> [f64; 2],
+    ) -> Vec<[f64; 2]> {
+        let mut gait = CrawlGait::new(params, ControllerSettings::default());
+        gait.reset();
+        let mut out = Action::default();
+        (0..(1.0 / CONTROL_DT) as usize)
+            .map(|_| {
+                gait.act(obs, &mut out);
+                read(&gait.joints, &out.pd_targets)
+            })
+            .collect()
+    }
+
     #[test]
     fn a_swinging_hand_clears_the_plans_tread_only_with_swing_ahead() {
         // A second of crawling towards a plan 0.5 m/s ahead over a flat map; the plan's
@@ -1895,21 +1921,8 @@ mod tests {
         let arms = |params: CrawlParams, tread: f64| {
             let mut obs = crawling_obs();
             obs.head_pos = [0.6, 0.0, -0.15];
-            for i in 0..NUM_WAYPOINTS {
-                obs.waypoints[i] = [0.25 * (i + 1) as f64, 0.0, 0.0];
-            }
-            obs.waypoint_speeds = [0.5; NUM_WAYPOINTS];
-            obs.waypoint_ground = [tread; NUM_WAYPOINTS];
-            let mut gait = CrawlGait::new(params, ControllerSettings::default());
-            gait.reset();
-            let mut out = Action::default();
-            let j = gait.joints;
-            (0..(1.0 / CONTROL_DT) as usize)
-                .map(|_| {
-                    gait.act(&obs, &mut out);
-                    [0, 1].map(|a| out.pd_targets[j.elbow[a]])
-                })
-                .collect::<Vec<_>>()
+            let obs = with_plan_ahead(obs, tread);
+            a_second_of(params, &obs, |j, t| [0, 1].map(|a| t[j.elbow[a]]))
         };
         // The head's clearance would also read the plan's tread: left out here.
         let off = CrawlParams {
@@ -1938,21 +1951,8 @@ mod tests {
             let (s, c) = 1.0_f64.sin_cos();
             obs.root_rotation = [c, 0.0, -s, 0.0, 1.0, 0.0];
             fill_map(&mut obs, &|x, _| if x >= 0.2 { ledge } else { 0.0 });
-            for i in 0..NUM_WAYPOINTS {
-                obs.waypoints[i] = [0.25 * (i + 1) as f64, 0.0, 0.0];
-            }
-            obs.waypoint_speeds = [0.5; NUM_WAYPOINTS];
-            obs.waypoint_ground = [ledge; NUM_WAYPOINTS];
-            let mut gait = CrawlGait::new(params, ControllerSettings::default());
-            gait.reset();
-            let mut out = Action::default();
-            let j = gait.joints;
-            (0..(1.0 / CONTROL_DT) as usize)
-                .map(|_| {
-                    gait.act(&obs, &mut out);
-                    [0, 1].map(|l| out.pd_targets[j.hip[l][1]])
-                })
-                .collect::<Vec<_>>()
+            let obs = with_plan_ahead(obs, ledge);
+            a_second_of(params, &obs, |j, t| [0, 1].map(|l| t[j.hip[l][1]]))
         };
         let most_flexed =
             |h: &[[f64; 2]]| h.iter().flatten().copied().fold(f64::INFINITY, f64::min);
