@@ -376,6 +376,7 @@ fn trace(
     let start = staggered_start(origin, r);
     // `PLAMO_TRACE_DROP_AT`: walk at `speed` and drop to the crawl then (see `drop`).
     // `PLAMO_TRACE_TURN=1` (or -1): crawl off at a right angle (see `turn`).
+    // `PLAMO_TRACE_CROUCH_AT`: rise to a crouch-walk's head then (see `crouch`).
     let turn: Option<f64> = std::env::var("PLAMO_TRACE_TURN")
         .ok()
         .map(|v| v.parse())
@@ -393,6 +394,14 @@ fn trace(
             crawl_speed: 1.0,
             head_height: head,
             drop_at: v.parse()?,
+        }),
+        Err(_) if std::env::var_os("PLAMO_TRACE_CROUCH_AT").is_some() => Box::new(CrouchPath {
+            line: StraightPath {
+                start,
+                speed,
+                head_height: head,
+            },
+            up_at: std::env::var("PLAMO_TRACE_CROUCH_AT")?.parse()?,
         }),
         Err(_) if std::env::var_os("PLAMO_SWEEP_HOLD").is_some() => Box::new(HeldPath {
             line: StraightPath {

@@ -23,9 +23,9 @@ mod tune;
 pub use component::{ControllerComponent, snapshot_from_message};
 pub use error::{ControllerError, Result};
 pub use gait::{
-    CRAWL_PARAMS_VERSION, CrawlParams, DEFAULT_CRAWL_PARAMS, DEFAULT_GAIT_PARAMS,
-    FOREARM_CRAWL_PARAMS, FormParams, GAIT_PARAMS_VERSION, GaitParams, LegGeometry,
-    ModelBasedController, ResidualGains, leg_fk, leg_ik,
+    CRAWL_PARAMS_VERSION, CrawlParams, DEFAULT_CRAWL_PARAMS, DEFAULT_GAIT_PARAMS, FormParams,
+    GAIT_PARAMS_VERSION, GaitParams, HAND_CRAWL_PARAMS, LegGeometry, ModelBasedController,
+    ResidualGains, leg_fk, leg_ik,
 };
 pub use metrics::{
     MetricsAccumulator, MetricsSummary, PathRewardWeights, RewardTerms, StepSample, path_reward,

@@ -29,7 +29,7 @@ pub enum Form {
     Run,
     /// Crouch-walk (head 0.8 m).
     Crouch,
-    /// Crawl on hands and knees (head 0.4 m; `crawl.toml`). Its rollouts start
+    /// Crawl on forearms and knees (head ~0.4 m; `crawl.toml`). Its rollouts start
     /// standing, so the get-down is part of every one.
     Crawl,
 }

@@ -1,5 +1,5 @@
-//! The crawl gait of the model-based controller: hands and knees, head about 0.4 m
-//! (paper 4.2, the crawl form).
+//! The crawl gait of the model-based controller: forearms (or hands) and knees, head
+//! about 0.4 m (paper 4.2, the crawl form).
 //!
 //! - The posture is a desired body frame: pelvis at a height set by the thighs'
 //!   length (knees under the hips), pitched forward, the spine bent so the back is
@@ -32,13 +32,16 @@
 //!   and the high side's draw up (`roll_reach`, `roll_rate_reach`, off in the shipped
 //!   file; beyond `roll_reach_from`, on smooth ground only with
 //!   `roll_reach_smooth_only`).
-//! - With `forearms` (`params/crawl-forearms.toml`; off in the shipped file) the arms
-//!   carry the front on the forearms: each arm's contact is its elbow, the upper arm
-//!   aimed at it and the forearm laid forward along the ground (its hand end lifted
-//!   by `forearm_lift` in the swing), so the load goes down the upper arm instead of
-//!   through a bent elbow. A swinging knee whose landing is higher steps up
-//!   (`knee_step_up`, on in that file): it clears the step by its radius and aims
-//!   its thigh from the pelvis as it is, which pitches past its target.
+//! - With `forearms` (on in the built-in `params/crawl.toml`, off in
+//!   `params/crawl-hands.toml`) the arms carry the front on the forearms: each arm's
+//!   contact is its elbow, the upper arm aimed at it and the forearm laid forward
+//!   along the ground (its hand end lifted by `forearm_lift` in the swing), so the
+//!   load goes down the upper arm instead of through a bent elbow. A swinging knee
+//!   whose landing is higher steps up (`knee_step_up`, on in that file): it clears
+//!   the step by its radius and aims its thigh from the pelvis as it is, which
+//!   pitches past its target. Lagging its timed plan, the crawl steers along the
+//!   plan's path (`pursuit`, on in that file; the path behind the first waypoint is
+//!   kept by `plan_trace`).
 //! - Getting down and up are joint-space blends over a fixed time from the joint
 //!   angles at the switch to the crawl's (or standing) pose, with the residual
 //!   wrench holding height rate and attitude.
@@ -58,6 +61,7 @@ use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 use super::map_plane::MapPlane;
 use super::params::{parse_toml, read_params};
 use super::plan_ground::PlanGround;
+use super::plan_trace::PlanTrace;
 use super::{residual_force, residual_wrench};
 use crate::error::{ControllerError, Result};
 use crate::math::{smoothstep, sub3, wrap_angle};
@@ -68,12 +72,12 @@ use crate::settings::{ControllerSettings, GRAVITY};
 /// Version of the crawl parameter file format.
 pub const CRAWL_PARAMS_VERSION: u32 = 1;
 
-/// The built-in crawl parameter file.
+/// The built-in crawl parameter file: on forearms and knees (`forearms` on).
 pub const DEFAULT_CRAWL_PARAMS: &str = include_str!("../../params/crawl.toml");
 
-/// The shipped crawl on forearms and knees (`params/crawl-forearms.toml`, `forearms`
-/// on): an alternative to the built-in hand-and-knee crawl.
-pub const FOREARM_CRAWL_PARAMS: &str = include_str!("../../params/crawl-forearms.toml");
+/// The shipped crawl on hands and knees (`params/crawl-hands.toml`), the built-in one
+/// until session 17: an alternative to the forearm crawl.
+pub const HAND_CRAWL_PARAMS: &str = include_str!("../../params/crawl-hands.toml");
 
 /// Crawl gait parameters (`params/crawl.toml`; units there and here).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -332,6 +336,15 @@ pub struct CrawlParams {
     /// the face (RESULTS "Crawl", session 16). 0: off.
     #[serde(default)]
     pub knee_step_up: f64,
+    /// Lookahead along the plan's path for a crawl lagging its timed plan \[m\]: it
+    /// moves towards the path's point this far beyond the one nearest its head, and
+    /// faces the one twice as far, instead of making for the first waypoint (0.5 s
+    /// ahead of where the plan is) and facing the second. Lagging ~1 m, the crawl
+    /// cut the playground's hedge corner the plan kept 0.5 m clear of, and its
+    /// shoulder caught (RESULTS "Crawl", session 17). Within this of the first
+    /// waypoint it steers as without. 0: off.
+    #[serde(default)]
+    pub pursuit: f64,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -411,14 +424,11 @@ impl Default for CrawlParams {
 }
 
 impl CrawlParams {
-    /// The shipped crawl on forearms and knees ([`FOREARM_CRAWL_PARAMS`]).
-    pub fn forearms() -> Self {
+    /// The shipped crawl on hands and knees ([`HAND_CRAWL_PARAMS`]).
+    pub fn hands() -> Self {
         // Tested to parse and validate, as the default.
-        Self::from_toml(
-            FOREARM_CRAWL_PARAMS,
-            Path::new("<built-in crawl-forearms.toml>"),
-        )
-        .expect("built-in forearm crawl parameters are valid")
+        Self::from_toml(HAND_CRAWL_PARAMS, Path::new("<built-in crawl-hands.toml>"))
+            .expect("built-in hand crawl parameters are valid")
     }
 
     /// Parses and validates parameters; `origin` names the source in errors.
@@ -447,7 +457,8 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 67] = [
+        let ranges: [(&'static str, f64, f64, f64); 68] = [
+            ("pursuit", self.pursuit, 0.0, 3.0),
             ("knee_step_up", self.knee_step_up, 0.0, 0.5),
             ("forearm_press", self.forearm_press, -0.5, 0.5),
             ("forearm_lift", self.forearm_lift, 0.0, 1.5),
@@ -788,6 +799,8 @@ pub(crate) struct CrawlGait {
     /// Low-passed rise of the ground under the contacts \[rad\], 0 downhill (see
     /// `slope_pitch`; stays 0 without it).
     slope: f64,
+    /// The plan's path behind its first waypoint (see `pursuit`).
+    trace: PlanTrace,
     last_wrench: RootWrench,
 }
 
@@ -834,6 +847,7 @@ impl CrawlGait {
             aligning: false,
             rough: 0.0,
             slope: 0.0,
+            trace: PlanTrace::default(),
             last_wrench: RootWrench::default(),
         }
     }
@@ -875,6 +889,7 @@ impl CrawlGait {
         self.v_cmd = [obs.root_lin_vel[0], obs.root_lin_vel[1]];
         self.v_filt = self.v_cmd;
         self.v_slip = [0.0; 2];
+        self.trace.clear();
     }
 
     /// Starts standing up.
@@ -1132,8 +1147,20 @@ impl CrawlGait {
         if n > vmax {
             v_plan = v_plan.map(|v| v * vmax / n);
         }
-        let heading_err = if wp1[0].hypot(wp1[1]) > 0.2 {
-            wrap_angle(wp1[1].atan2(wp1[0]))
+        self.trace.record(obs);
+        let mut face = [wp1[0], wp1[1]];
+        if p.pursuit > 0.0 {
+            // The plan's speed, along the path.
+            if let Some(to) = self.trace.pursuit(obs, p.pursuit, 0) {
+                let (speed, d) = (v_plan[0].hypot(v_plan[1]), to[0].hypot(to[1]));
+                if d > 1e-6 {
+                    v_plan = to.map(|v| v * speed / d);
+                }
+            }
+            face = self.trace.pursuit(obs, 2.0 * p.pursuit, 1).unwrap_or(face);
+        }
+        let heading_err = if face[0].hypot(face[1]) > 0.2 {
+            wrap_angle(face[1].atan2(face[0]))
         } else {
             0.0
         };
@@ -1389,6 +1416,7 @@ impl CrawlGait {
         self.aligning = false;
         self.rough = 0.0;
         self.slope = 0.0;
+        self.trace.clear();
     }
 }
 
@@ -1419,6 +1447,7 @@ mod tests {
 
     #[test]
     fn built_in_parameters_validate_and_bad_ones_name_the_field() {
+        CrawlParams::hands().validate().unwrap();
         let p = CrawlParams::default();
         p.validate().unwrap();
         let bad = CrawlParams { duty: 1.5, ..p };
@@ -1440,7 +1469,7 @@ mod tests {
         // No gravity feed-forward, so the shoulder's target is the IK's alone.
         let p = CrawlParams {
             hand_load: 0.0,
-            ..CrawlParams::forearms()
+            ..CrawlParams::default()
         };
         assert!(p.forearms);
         let mut obs = crawling_obs();
@@ -1513,7 +1542,7 @@ mod tests {
     fn rough_speed_slows_the_crawl_on_stairs_not_on_slopes() {
         let old = CrawlParams {
             rough_step: 4.0,
-            ..CrawlParams::default()
+            ..CrawlParams::hands()
         };
         let rough = CrawlParams {
             rough_step: 0.03,
@@ -1552,7 +1581,7 @@ mod tests {
         let old = CrawlParams {
             roll_first: false,
             yaw_last: false,
-            ..CrawlParams::default()
+            ..CrawlParams::hands()
         };
         let first = roll_torque(CrawlParams {
             roll_first: true,
@@ -1581,7 +1610,7 @@ mod tests {
         let off = CrawlParams {
             roll_reach: 0.0,
             roll_rate_reach: 0.0,
-            ..CrawlParams::default()
+            ..CrawlParams::hands()
         };
         let on = CrawlParams {
             roll_reach: 1.0,
@@ -1638,7 +1667,7 @@ mod tests {
             roll_reach_from: 0.0,
             roll_reach_smooth_only: false,
             rough_step: 0.03,
-            ..CrawlParams::default()
+            ..CrawlParams::hands()
         };
         let smooth_only = CrawlParams {
             roll_reach: 1.5,
@@ -1678,7 +1707,7 @@ mod tests {
         let p = CrawlParams {
             roll_first: true,
             roll_first_from: 0.2,
-            ..CrawlParams::default()
+            ..CrawlParams::hands()
         };
         let norm = |t: [f64; 3]| t.iter().map(|x| x * x).sum::<f64>().sqrt();
         let shared = {
@@ -1707,7 +1736,7 @@ mod tests {
         let p = CrawlParams {
             roll_first: false,
             yaw_last: true,
-            ..CrawlParams::default()
+            ..CrawlParams::hands()
         };
         let t = share_torque(&p, cap, 0.1, ask);
         assert!(
@@ -1720,7 +1749,7 @@ mod tests {
         let off = CrawlParams {
             roll_first: false,
             yaw_last: false,
-            ..CrawlParams::default()
+            ..CrawlParams::hands()
         };
         assert_eq!(share_torque(&off, cap, 0.1, ask), ask);
     }
@@ -1737,7 +1766,7 @@ mod tests {
         obs.waypoint_ground = [0.15; NUM_WAYPOINTS];
         let off = CrawlParams {
             ground_ahead: false,
-            ..CrawlParams::default()
+            ..CrawlParams::hands()
         };
         let on = CrawlParams {
             ground_ahead: true,
@@ -1793,7 +1822,7 @@ mod tests {
         let off = CrawlParams {
             slope_pitch: 0.0,
             ground_ahead: true,
-            ..CrawlParams::default()
+            ..CrawlParams::hands()
         };
         let on = CrawlParams {
             slope_pitch: 1.0,
@@ -1830,7 +1859,7 @@ mod tests {
         let off = CrawlParams {
             head_clear: 0.0,
             head_push: 0.0,
-            ..CrawlParams::default()
+            ..CrawlParams::hands()
         };
         let on = CrawlParams {
             head_clear: 0.3,
@@ -1867,7 +1896,7 @@ mod tests {
         let off = CrawlParams {
             head_clear: 0.3,
             head_push: 0.0,
-            ..CrawlParams::default()
+            ..CrawlParams::hands()
         };
         let on = CrawlParams {
             head_push: 1.0,
@@ -1930,7 +1959,7 @@ mod tests {
             ground_ahead: false,
             head_clear: 0.0,
             head_push: 0.0,
-            ..CrawlParams::default()
+            ..CrawlParams::hands()
         };
         let on = CrawlParams {
             swing_ahead: true,
@@ -1956,13 +1985,13 @@ mod tests {
         };
         let most_flexed =
             |h: &[[f64; 2]]| h.iter().flatten().copied().fold(f64::INFINITY, f64::min);
-        let off = CrawlParams::forearms();
+        let off = CrawlParams::default();
         assert!(off.knee_step_up > 0.0, "the forearm crawl steps up");
         let off = CrawlParams {
             knee_step_up: 0.0,
             ..off
         };
-        let on = CrawlParams::forearms();
+        let on = CrawlParams::default();
         assert_eq!(hips(on, 0.0), hips(off, 0.0));
         let (up, stuck) = (hips(on, 0.1), hips(off, 0.1));
         // Aimed from the pelvis as it is (pitched past its target) and reaching forward,

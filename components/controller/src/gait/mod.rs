@@ -14,8 +14,9 @@ mod ik;
 mod map_plane;
 mod params;
 mod plan_ground;
+mod plan_trace;
 
-pub use crawl::{CRAWL_PARAMS_VERSION, CrawlParams, DEFAULT_CRAWL_PARAMS, FOREARM_CRAWL_PARAMS};
+pub use crawl::{CRAWL_PARAMS_VERSION, CrawlParams, DEFAULT_CRAWL_PARAMS, HAND_CRAWL_PARAMS};
 pub use ik::{LegGeometry, leg_fk, leg_ik};
 pub use params::{DEFAULT_GAIT_PARAMS, FormParams, GAIT_PARAMS_VERSION, GaitParams, ResidualGains};
 
