@@ -1,14 +1,15 @@
 //! One controller step: observation build (incl. the 8x8 height map query) plus the
 //! model-based policy, from a real standing humanoid state (rapier): walking (the biped
 //! gait) and asked to crawl (the four-limb gait: getting down, then crawling, as the
-//! repeated steps advance its phase).
+//! repeated steps advance its phase), with the built-in crawl on forearms and knees
+//! and, as the baseline in the same run, the hand-and-knee crawl.
 
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use plamo_controller::{
-    Action, ControllerSettings, HumanoidSnapshot, ModelBasedController, NUM_WAYPOINTS, Observation,
-    Policy, StraightPath, flat_scene,
+    Action, ControllerSettings, CrawlParams, GaitParams, HumanoidSnapshot, ModelBasedController,
+    NUM_WAYPOINTS, Observation, Policy, StraightPath, flat_scene,
 };
 use plamo_physics::{BackendKind, HumanoidPose, PhysicsSettings, create_backend};
 
@@ -23,9 +24,11 @@ fn step(c: &mut Criterion) {
     let snap = HumanoidSnapshot::from(physics.state());
     let mut obs = Observation::new(ModelBasedController::LAYOUT);
     let mut action = Action::default();
-    for (name, head_height, speed) in [
-        ("controller_step_model_based", 1.47, 1.0),
-        ("controller_step_model_based_crawl", 0.4, 0.5),
+    let (forearms, hands) = (CrawlParams::default(), CrawlParams::hands());
+    for (name, head_height, speed, crawl) in [
+        ("controller_step_model_based", 1.47, 1.0, forearms),
+        ("controller_step_model_based_crawl", 0.4, 0.5, forearms),
+        ("controller_step_model_based_crawl_hands", 0.4, 0.5, hands),
     ] {
         let path = StraightPath {
             start: [0.0, 0.0],
@@ -35,7 +38,12 @@ fn step(c: &mut Criterion) {
         let plan: Vec<_> = (1..=NUM_WAYPOINTS)
             .map(|i| path.at(&scene, 0.5 * i as f64))
             .collect();
-        let mut policy = ModelBasedController::new(ControllerSettings::default()).unwrap();
+        let mut policy = ModelBasedController::with_all_params(
+            GaitParams::default(),
+            crawl,
+            ControllerSettings::default(),
+        )
+        .unwrap();
         c.bench_function(name, |b| {
             b.iter(|| {
                 obs.update(black_box(&snap), black_box(&plan), &scene)
