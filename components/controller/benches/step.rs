@@ -2,7 +2,8 @@
 //! model-based policy, from a real standing humanoid state (rapier): walking (the biped
 //! gait) and asked to crawl (the four-limb gait: getting down, then crawling, as the
 //! repeated steps advance its phase), with the built-in crawl on forearms and knees
-//! and, as the baseline in the same run, the hand-and-knee crawl.
+//! and, as baselines in the same run, the same without `pursuit` and the
+//! hand-and-knee crawl.
 
 use std::hint::black_box;
 
@@ -25,9 +26,14 @@ fn step(c: &mut Criterion) {
     let mut obs = Observation::new(ModelBasedController::LAYOUT);
     let mut action = Action::default();
     let (forearms, hands) = (CrawlParams::default(), CrawlParams::hands());
+    let no_pursuit = CrawlParams {
+        pursuit: 0.0,
+        ..forearms
+    };
     for (name, head_height, speed, crawl) in [
         ("controller_step_model_based", 1.47, 1.0, forearms),
         ("controller_step_model_based_crawl", 0.4, 0.5, forearms),
+        ("controller_step_crawl_no_pursuit", 0.4, 0.5, no_pursuit),
         ("controller_step_model_based_crawl_hands", 0.4, 0.5, hands),
     ] {
         let path = StraightPath {
