@@ -381,6 +381,11 @@ fn trace(
         .ok()
         .map(|v| v.parse())
         .transpose()?;
+    let line = StraightPath {
+        start,
+        speed,
+        head_height: head,
+    };
     let path: Box<dyn HeadPath> = match std::env::var("PLAMO_TRACE_DROP_AT") {
         _ if turn.is_some() => Box::new(SidePath {
             start,
@@ -396,27 +401,15 @@ fn trace(
             drop_at: v.parse()?,
         }),
         Err(_) if std::env::var_os("PLAMO_TRACE_CROUCH_AT").is_some() => Box::new(CrouchPath {
-            line: StraightPath {
-                start,
-                speed,
-                head_height: head,
-            },
+            line,
             up_at: std::env::var("PLAMO_TRACE_CROUCH_AT")?.parse()?,
         }),
         Err(_) if std::env::var_os("PLAMO_SWEEP_HOLD").is_some() => Box::new(HeldPath {
-            line: StraightPath {
-                start,
-                speed,
-                head_height: head,
-            },
+            line,
             hold: std::env::var("PLAMO_SWEEP_HOLD")?.parse()?,
         }),
         Err(_) => Box::new(RisingPath {
-            line: StraightPath {
-                start,
-                speed,
-                head_height: head,
-            },
+            line,
             up_at: std::env::var("PLAMO_TRACE_UP_AT")
                 .ok()
                 .and_then(|v| v.parse().ok())

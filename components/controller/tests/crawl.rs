@@ -92,8 +92,21 @@ fn crawl_in(
     path: &dyn HeadPath,
     duration: f64,
 ) -> MetricsSummary {
+    crawl_with(kind, scene, path, duration, CrawlParams::default())
+}
+
+/// [`crawl_in`] with the crawl parameters `crawl`.
+fn crawl_with(
+    kind: BackendKind,
+    scene: &plamo_scenes::Scene,
+    path: &dyn HeadPath,
+    duration: f64,
+    crawl: CrawlParams,
+) -> MetricsSummary {
     let settings = settings();
-    let mut policy = ModelBasedController::new(settings.clone()).unwrap();
+    let mut policy =
+        ModelBasedController::with_all_params(GaitParams::default(), crawl, settings.clone())
+            .unwrap();
     let m = run_path(kind, scene, path, duration, &mut policy, &settings).unwrap();
     eprintln!("{}", serde_json::to_string_pretty(&m).unwrap());
     m
@@ -341,23 +354,7 @@ pub fn crawls_under_a_0_6_m_ceiling(kind: BackendKind) {
 }
 
 pub fn crawls_on_its_hands(kind: BackendKind) {
-    let settings = settings();
-    let mut policy = ModelBasedController::with_all_params(
-        GaitParams::default(),
-        CrawlParams::hands(),
-        settings.clone(),
-    )
-    .unwrap();
-    let m = run_path(
-        kind,
-        &flat_scene(10.0),
-        &line(),
-        10.0,
-        &mut policy,
-        &settings,
-    )
-    .unwrap();
-    eprintln!("{}", serde_json::to_string_pretty(&m).unwrap());
+    let m = crawl_with(kind, &flat_scene(10.0), &line(), 10.0, CrawlParams::hands());
     // The hand crawl (`params/crawl-hands.toml`, the built-in one until session 17) is
     // faster than the forearm crawl on flat ground and its head higher. `crawl_sweep`
     // flat 0.5 m/s, 16 and 8 runs: XY 0.07 / 0.10 m (MuJoCo / rapier).
@@ -425,12 +422,7 @@ pub fn pursues_the_path_round_an_arc_on_a_slope(kind: BackendKind) {
             straight: 2.0,
             radius: if r % 2 == 0 { 3.0 } else { -3.0 },
         };
-        let mut policy = ModelBasedController::with_all_params(
-            GaitParams::default(),
-            CrawlParams::default(),
-            settings.clone(),
-        )
-        .unwrap();
+        let mut policy = ModelBasedController::new(settings.clone()).unwrap();
         let m = run_path(kind, &scene, &path, 12.0, &mut policy, &settings).unwrap();
         falls.push(m.falls);
     }

@@ -1149,15 +1149,16 @@ impl CrawlGait {
         }
         self.trace.record(obs);
         let mut face = [wp1[0], wp1[1]];
-        if p.pursuit > 0.0 {
+        if p.pursuit > 0.0
+            && let Some(along) = self.trace.pursuit(obs, p.pursuit)
+        {
             // The plan's speed, along the path.
-            if let Some(to) = self.trace.pursuit(obs, p.pursuit, 0) {
-                let (speed, d) = (v_plan[0].hypot(v_plan[1]), to[0].hypot(to[1]));
-                if d > 1e-6 {
-                    v_plan = to.map(|v| v * speed / d);
-                }
+            let to = along.toward;
+            let (speed, d) = (v_plan[0].hypot(v_plan[1]), to[0].hypot(to[1]));
+            if d > 1e-6 {
+                v_plan = to.map(|v| v * speed / d);
             }
-            face = self.trace.pursuit(obs, 2.0 * p.pursuit, 1).unwrap_or(face);
+            face = along.face;
         }
         let heading_err = if face[0].hypot(face[1]) > 0.2 {
             wrap_angle(face[1].atan2(face[0]))

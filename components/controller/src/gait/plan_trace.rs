@@ -26,6 +26,15 @@ const TRACE_LEN: usize = (TRACE_SECONDS / CONTROL_DT) as usize;
 /// a re-plan or a reset on the plan moves it further.
 const JUMP: f64 = 0.5;
 
+/// Where [`PlanTrace::pursuit`] steers, heading frame relative to the head \[m\].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Pursuit {
+    /// The point to move towards.
+    pub(crate) toward: [f64; 2],
+    /// The point to face.
+    pub(crate) face: [f64; 2],
+}
+
 /// The plan's recent first waypoints in an odometry frame (see the module docs).
 #[derive(Debug, Clone)]
 pub(crate) struct PlanTrace {
@@ -98,22 +107,17 @@ impl PlanTrace {
         [self.head[0] + d[0], self.head[1] + d[1]]
     }
 
-    /// The point `lookahead` along the path beyond the path's point closest to the
-    /// head, but no further than waypoint `upto` (0: the first), heading frame
-    /// relative to the head \[m\]. With the body within `lookahead` of that waypoint
-    /// along the path this is the waypoint itself; lagging further, a point on the
-    /// path between the body and it. `None` until two points are recorded.
-    pub(crate) fn pursuit(
-        &self,
-        obs: &Observation,
-        lookahead: f64,
-        upto: usize,
-    ) -> Option<[f64; 2]> {
-        if self.points.len() < 2 {
+    /// Where a lagging body steers, heading frame relative to the head \[m\]: the point
+    /// `lookahead` along the path beyond the path's point nearest the head, no further
+    /// than the first waypoint (to move towards), and the point twice as far, no further
+    /// than the second (to face). With the body within the lookahead of that waypoint
+    /// along the path each is the waypoint itself; lagging further, a point on the path
+    /// between the body and it. `None` until two points are recorded.
+    pub(crate) fn pursuit(&self, obs: &Observation, lookahead: f64) -> Option<Pursuit> {
+        let n = self.points.len();
+        if n < 2 {
             return None;
         }
-        let n = self.points.len();
-        let upto = upto.min(obs.waypoints.len() - 1);
         let point = |i: usize| {
             if i < n {
                 self.points[i]
@@ -121,44 +125,58 @@ impl PlanTrace {
                 self.world(obs.waypoints[i - n + 1])
             }
         };
-        let last = n - 1 + upto;
-        // Closest point over the trace's segments; the latest of equals (a plan that
-        // stood still recorded one point many times).
+        // Nearest point over the trace's segments; the latest of equals (a plan that
+        // stood still recorded one point many times). The facing point may also start
+        // on the segment from the first waypoint to the second.
         let mut best = (f64::INFINITY, n - 1, 0.0);
-        for i in 0..last {
-            let (a, b) = (point(i), point(i + 1));
-            let ab = [b[0] - a[0], b[1] - a[1]];
-            let l2 = ab[0] * ab[0] + ab[1] * ab[1];
-            let u = if l2 > 1e-12 {
-                (((self.head[0] - a[0]) * ab[0] + (self.head[1] - a[1]) * ab[1]) / l2)
-                    .clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let d = dist(lerp(a, b, u), self.head);
-            if d <= best.0 {
-                best = (d, i, u);
-            }
+        for i in 0..n - 1 {
+            best = self.nearer(best, i, point(i), point(i + 1));
         }
-        let (_, mut i, u) = best;
-        let mut at = lerp(point(i), point(i + 1), u);
-        let mut left = lookahead;
-        while i < last {
-            let next = point(i + 1);
-            let d = dist(at, next);
-            if d >= left {
-                at = lerp(at, next, left / d);
-                break;
+        let past_first = self.nearer(best, n - 1, point(n - 1), point(n));
+        let ahead = |(_, mut i, u): (f64, usize, f64), lookahead: f64, last: usize| {
+            let mut at = lerp(point(i), point(i + 1), u);
+            let mut left = lookahead;
+            while i < last {
+                let next = point(i + 1);
+                let d = dist(at, next);
+                if d >= left {
+                    at = lerp(at, next, left / d);
+                    break;
+                }
+                left -= d;
+                at = next;
+                i += 1;
             }
-            left -= d;
-            at = next;
-            i += 1;
-        }
-        let [x, y, _] = to_heading_frame(
-            self.heading,
-            [at[0] - self.head[0], at[1] - self.head[1], 0.0],
-        );
-        Some([x, y])
+            let [x, y, _] = to_heading_frame(
+                self.heading,
+                [at[0] - self.head[0], at[1] - self.head[1], 0.0],
+            );
+            [x, y]
+        };
+        Some(Pursuit {
+            toward: ahead(best, lookahead, n - 1),
+            face: ahead(past_first, 2.0 * lookahead, n),
+        })
+    }
+
+    /// `best` (distance to the head, segment, position along it) or segment `i` from
+    /// `a` to `b`, whichever comes nearer the head; `i` on a tie.
+    fn nearer(
+        &self,
+        best: (f64, usize, f64),
+        i: usize,
+        a: [f64; 2],
+        b: [f64; 2],
+    ) -> (f64, usize, f64) {
+        let ab = [b[0] - a[0], b[1] - a[1]];
+        let l2 = ab[0] * ab[0] + ab[1] * ab[1];
+        let u = if l2 > 1e-12 {
+            (((self.head[0] - a[0]) * ab[0] + (self.head[1] - a[1]) * ab[1]) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let d = dist(lerp(a, b, u), self.head);
+        if d <= best.0 { (d, i, u) } else { best }
     }
 }
 
@@ -201,13 +219,13 @@ mod tests {
             trace.record(&obs);
         }
         // First waypoint now at s = 2.9, i.e. (2, 0.9): aiming at it cuts the corner.
-        let p = trace.pursuit(&obs, 0.5, 0).unwrap();
+        let p = trace.pursuit(&obs, 0.5).unwrap().toward;
         assert!((p[0] - 0.5).abs() < 1e-9 && p[1].abs() < 1e-9, "{p:?}");
         // Near the end of the path it is the waypoint itself.
         observe(&mut obs, [2.0, 0.7], |k| along(2.9 + 0.5 * k as f64));
         let mut near = trace.clone();
         near.head = [2.0, 0.7];
-        let p = near.pursuit(&obs, 0.5, 0).unwrap();
+        let p = near.pursuit(&obs, 0.5).unwrap().toward;
         assert!(
             (p[0] - 0.0).abs() < 1e-9 && (p[1] - 0.2).abs() < 1e-9,
             "{p:?}"
@@ -215,7 +233,7 @@ mod tests {
         // A re-plan that moves the first waypoint far starts a new trace.
         observe(&mut obs, [0.0, 0.0], |k| [-1.0, 0.5 * k as f64]);
         trace.record(&obs);
-        assert!(trace.pursuit(&obs, 0.5, 0).is_none());
+        assert!(trace.pursuit(&obs, 0.5).is_none());
     }
 
     #[test]
