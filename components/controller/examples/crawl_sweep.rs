@@ -3,7 +3,7 @@
 //! part of it.
 //!
 //! `cargo run --release -p plamo-controller --features mujoco --example crawl_sweep --
-//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc|drop|rise|crouch|turn|trace]
+//! [engines] [speeds] [head height m] [seconds] [runs] [straight|arc|drop|rise|crouch|turn|corner@D|trace]
 //! [terrains: flat,slope,rough,stairs,ceiling]` (the sloped, rough and stair strips
 //! are the builtin `terrain-*` scenes `plamo eval locomotion` uses, from x 5, y 3;
 //! `ceiling` is flat with the crawl suite's 0.6 m ceiling; `stairs@A`: 0.12 m x 0.42 m
@@ -15,7 +15,10 @@
 //! `crouch`: straight, the plan rises to a crouch-walk's 0.8 m head at 5 s (the fall
 //! rule's bar is the crouch-walk's 0.3 m throughout). `turn`: the plan crawls off at a right angle to the standing body's heading (left
 //! in even runs, right in odd ones), as where a walk leg ends at a landmark and the
-//! crawl leg heads elsewhere. `PLAMO_SWEEP_HOLD=S`: the plan
+//! crawl leg heads elsewhere. `corner@D`: straight for 6 s of the speed, then on at
+//! that speed D degrees to the left (even runs) or right (odd ones) from a corner
+//! (`TurnPath`), as a crawl lagging its plan meets a crawl leg that heads off from a
+//! landmark (run it for ~11 s: the strips are 6 m wide). `PLAMO_SWEEP_HOLD=S`: the plan
 //! waits S seconds (straight paths), moving its point at rest to where the crawl's
 //! head ends after the get-down (0.7 m ahead of the standing head), so the errors measure the crawl's tracking, not
 //! the get-down's lag behind a plan that left at once. `PLAMO_PHYSICS_PARAMS=FILE`: physics
@@ -25,8 +28,8 @@ use std::error::Error;
 
 use plamo_controller::{
     ArcPath, ControllerSettings, CrawlParams, GaitParams, HeadPath, MetricsSummary,
-    ModelBasedController, RisingPath, StraightPath, ceiling_scene, flat_scene, ledge_scene,
-    run_path_with, staggered_start,
+    ModelBasedController, RisingPath, START_ACCEL, StraightPath, TurnPath, ceiling_scene,
+    flat_scene, ledge_scene, run_path_with, staggered_start,
 };
 use plamo_physics::BackendKind;
 use rayon::prelude::*;
@@ -49,6 +52,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     let drop = arg(5, "straight") == "drop";
     let rise = arg(5, "straight") == "rise";
     let turn = arg(5, "straight") == "turn";
+    let corner: Option<f64> = match arg(5, "straight").strip_prefix("corner@") {
+        Some(deg) => Some(deg.parse::<f64>()?.to_radians()),
+        None => None,
+    };
     let crouch = arg(5, "straight") == "crouch";
     let settings = ControllerSettings {
         body_mass: plamo_physics::humanoid::total_mass(),
@@ -110,6 +117,16 @@ fn main() -> Result<(), Box<dyn Error>> {
                                     head_height: head,
                                 },
                                 up_at: 5.0,
+                            })
+                        } else if let Some(angle) = corner {
+                            Box::new(TurnPath {
+                                start,
+                                speed,
+                                corner_speed: speed,
+                                head_height: head,
+                                first: 6.0 * speed,
+                                turn: if r % 2 == 0 { angle } else { -angle },
+                                accel: START_ACCEL,
                             })
                         } else if turn {
                             Box::new(SidePath {

@@ -345,6 +345,14 @@ pub struct CrawlParams {
     /// waypoint it steers as without. 0: off.
     #[serde(default)]
     pub pursuit: f64,
+    /// Heading error above which a crawl already down turns towards its plan before
+    /// it moves on \[rad\]: as just after getting down, it only creeps sideways or back
+    /// (`max_side_speed`) until it faces the plan within 0.3 rad. Where a crawl leg
+    /// starts at a landmark and heads off at 90-180 degrees, the crawl swept its limbs
+    /// sideways at the plan's speed while it yawed and rolled over a forearm
+    /// (RESULTS "Crawl", session 18). 0: off.
+    #[serde(default)]
+    pub realign_above: f64,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -457,8 +465,9 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 68] = [
+        let ranges: [(&'static str, f64, f64, f64); 69] = [
             ("pursuit", self.pursuit, 0.0, 3.0),
+            ("realign_above", self.realign_above, 0.0, PI),
             ("knee_step_up", self.knee_step_up, 0.0, 0.5),
             ("forearm_press", self.forearm_press, -0.5, 0.5),
             ("forearm_lift", self.forearm_lift, 0.0, 1.5),
@@ -1172,6 +1181,12 @@ impl CrawlGait {
         if self.aligning && heading_err.abs() < ALIGNED {
             self.aligning = false;
         }
+        if p.realign_above > 0.0
+            && heading_err.abs() > p.realign_above
+            && matches!(self.mode, Mode::Crawl)
+        {
+            self.aligning = true;
+        }
         if self.aligning {
             v_plan[0] = v_plan[0].max(-p.max_side_speed);
             v_plan[1] = v_plan[1].clamp(-p.max_side_speed, p.max_side_speed);
@@ -1537,6 +1552,43 @@ mod tests {
             gait.act(&obs, &mut out);
         }
         gait.v_cmd[0].hypot(gait.v_cmd[1])
+    }
+
+    #[test]
+    fn a_crawl_already_down_turns_first_where_its_plan_heads_off_with_realign_above() {
+        // Crawling ahead at 1 m/s for 3 s, then the plan heads off 135 degrees to the
+        // left (a crawl leg starting at a landmark); the speed commanded 1 s later.
+        let speed_after_turn = |params: CrawlParams| {
+            let mut obs = crawling_obs();
+            let mut gait = CrawlGait::new(params, ControllerSettings::default());
+            gait.reset();
+            let mut out = Action::default();
+            for (seconds, angle) in [(3.0, 0.0_f64), (1.0, 0.75 * PI)] {
+                for i in 0..NUM_WAYPOINTS {
+                    let d = (i + 1) as f64 * WAYPOINT_SPACING;
+                    obs.waypoints[i] = [d * angle.cos(), d * angle.sin(), 0.0];
+                    obs.waypoint_speeds[i] = 1.0;
+                }
+                for _ in 0..(seconds / CONTROL_DT) as usize {
+                    gait.act(&obs, &mut out);
+                }
+            }
+            gait.v_cmd[0].hypot(gait.v_cmd[1])
+        };
+        let p = CrawlParams {
+            realign_above: 1.0,
+            ..CrawlParams::default()
+        };
+        let turning = speed_after_turn(p);
+        assert!(
+            turning <= p.max_side_speed * 2f64.sqrt() + 1e-9,
+            "{turning} m/s"
+        );
+        let off = speed_after_turn(CrawlParams {
+            realign_above: 0.0,
+            ..p
+        });
+        assert!(off > 0.5, "without realign_above: {off} m/s");
     }
 
     #[test]
