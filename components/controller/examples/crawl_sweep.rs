@@ -13,7 +13,7 @@
 //! height and 1 m/s at 4 s, the get-down from a walk. `rise`: straight, the plan rises
 //! to a standing head at 5 s (the get-up; a crawler still down counts as fallen).
 //! `crouch`: straight, the plan rises to a crouch-walk's 0.8 m head at 5 s (the fall
-//! rule's bar is the crouch-walk's 0.3 m throughout). `turn`: the plan crawls off at a right angle to the standing body's heading (left
+//! rule's bar is the crawl's 0.2 m throughout). `turn`: the plan crawls off at a right angle to the standing body's heading (left
 //! in even runs, right in odd ones), as where a walk leg ends at a landmark and the
 //! crawl leg heads elsewhere. `corner@D`: straight for 6 s of the speed, then on at
 //! that speed D degrees to the left (even runs) or right (odd ones) from a corner
@@ -260,7 +260,8 @@ impl HeadPath for HeldPath {
 
 /// A straight crawl plan whose head rises to a crouch-walk's 0.8 m at `up_at`: a
 /// crawl leg followed by a crouch-walk leg. The fall rule holds the head to the
-/// crouch-walk's bar (0.8 - 0.5 m) throughout, the crawl part included.
+/// crawl's bar (0.2 m) throughout, the crouch-walk part included (as the crawl suite's
+/// `stands_up_into_a_crouch_walk`).
 struct CrouchPath {
     line: StraightPath,
     up_at: f64,
@@ -278,7 +279,9 @@ impl HeadPath for CrouchPath {
         [1.0, 0.0]
     }
     fn head_height(&self) -> f64 {
-        0.8
+        // The fall rule's bar is the crawl's (0.2 m) throughout: with the crouch-walk's
+        // (0.3 m) a crawl whose head dipped counted as fallen before it stood up.
+        self.line.head_height
     }
 }
 
