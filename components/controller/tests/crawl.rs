@@ -2,7 +2,8 @@
 //! the `mujoco` feature): from standing, the default controller gets down on forearms
 //! and knees (`params/crawl.toml`) when the plan asks for a 0.4 m head, crawls a
 //! straight path, an arc, the planner's 1 m/s and under a 0.6 m ceiling without
-//! falling, climbs a 0.15 m ledge, follows a 1 m/s arc up a slope, gets down from a
+//! falling, climbs a 0.15 m ledge, follows a 1 m/s arc up a slope, turns back at a
+//! corner on gravel and stairs, gets down from a
 //! walk, and stands up again when the plan rises; bit-identical reruns. MuJoCo also:
 //! gravel and stairs, and crawling off at a right angle to the body after the
 //! get-down. The hand-and-knee crawl that ships beside it (`params/crawl-hands.toml`):
@@ -434,6 +435,36 @@ pub fn pursues_the_path_round_an_arc_on_a_slope(kind: BackendKind) {
     );
 }
 
+/// The crawl on the gravel and stair strips meets a plan that turns back 170 degrees
+/// at 1 m/s (left and right, two staggered starts each, 11 s): it lags its plan by
+/// ~1.5 m and finds the path heading off behind it, as where a crawl leg starts at a
+/// landmark. Sweeping its limbs sideways at the plan's speed while it yawed, it rolled
+/// over a forearm: measured (`crawl_sweep ENGINE 1.0 0.4 11 4 corner@170
+/// rough,stairs`) rapier 2, MuJoCo 1 falls without `realign_above`, 0 and 0 with it
+/// at 1 rad (the built-in file).
+pub fn turns_back_at_a_corner_on_gravel_and_stairs(kind: BackendKind) {
+    use plamo_controller::{START_ACCEL, TurnPath, staggered_start};
+    let mut falls = Vec::new();
+    for terrain in ["terrain-rough", "terrain-stairs"] {
+        let scene = plamo_scenes::builtin(terrain).unwrap();
+        for r in 0..4 {
+            let path = TurnPath {
+                start: staggered_start([5.0, 3.0], r),
+                speed: 1.0,
+                corner_speed: 1.0,
+                head_height: 0.4,
+                first: 6.0,
+                turn: if r % 2 == 0 { 170f64 } else { -170.0 }.to_radians(),
+                accel: START_ACCEL,
+            };
+            let m = crawl_in(kind, &scene, &path, 11.0);
+            falls.push((terrain, r, m.falls));
+        }
+    }
+    let total: u32 = falls.iter().map(|f| f.2).sum();
+    assert_eq!(total, 0, "{kind}: falls turning back: {falls:?}");
+}
+
 /// Falls allowed to the hand crawl in MuJoCo over 16 rollouts of 10 s on the gravel and stair strips of
 /// `plamo eval locomotion` (straight, 0.5 and 1 m/s, four staggered starts each, from
 /// standing). Measured: 3 (0 / 1 on gravel, 1 / 1 on stairs) since roll first from
@@ -636,6 +667,10 @@ macro_rules! crawl_suite {
             #[test]
             fn pursues_the_path_round_an_arc_on_a_slope() {
                 super::pursues_the_path_round_an_arc_on_a_slope($kind);
+            }
+            #[test]
+            fn turns_back_at_a_corner_on_gravel_and_stairs() {
+                super::turns_back_at_a_corner_on_gravel_and_stairs($kind);
             }
         }
     };
