@@ -52,10 +52,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     let drop = arg(5, "straight") == "drop";
     let rise = arg(5, "straight") == "rise";
     let turn = arg(5, "straight") == "turn";
-    let corner: Option<f64> = match arg(5, "straight").strip_prefix("corner@") {
-        Some(deg) => Some(deg.parse::<f64>()?.to_radians()),
-        None => None,
-    };
+    let corner: Option<f64> = arg(5, "straight")
+        .strip_prefix("corner@")
+        .map(|deg| deg.parse::<f64>().map(f64::to_radians))
+        .transpose()?;
     let crouch = arg(5, "straight") == "crouch";
     let settings = ControllerSettings {
         body_mass: plamo_physics::humanoid::total_mass(),

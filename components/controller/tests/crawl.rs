@@ -113,6 +113,11 @@ fn crawl_with(
     m
 }
 
+/// Staggered start `r` on a terrain strip of `plamo eval locomotion` (from x 5, y 3).
+fn strip_start(r: usize) -> [f64; 2] {
+    plamo_controller::staggered_start([5.0, 3.0], r)
+}
+
 fn check(kind: BackendKind, m: &MetricsSummary, what: &str) {
     check_within(kind, m, bounds(kind).xy, what);
 }
@@ -411,21 +416,17 @@ fn arc_slope_falls(kind: BackendKind) -> u32 {
 /// waypoint it cut inside the arc, turning ever sharper, and rolled over. With
 /// `pursuit` it follows the path itself.
 pub fn pursues_the_path_round_an_arc_on_a_slope(kind: BackendKind) {
-    use plamo_controller::staggered_start;
-    let settings = settings();
     let scene = plamo_scenes::builtin("terrain-slope").unwrap();
     let mut falls = Vec::new();
     for r in 0..2 {
         let path = ArcPath {
-            start: staggered_start([5.0, 3.0], r),
+            start: strip_start(r),
             speed: 1.0,
             head_height: 0.4,
             straight: 2.0,
             radius: if r % 2 == 0 { 3.0 } else { -3.0 },
         };
-        let mut policy = ModelBasedController::new(settings.clone()).unwrap();
-        let m = run_path(kind, &scene, &path, 12.0, &mut policy, &settings).unwrap();
-        falls.push(m.falls);
+        falls.push(crawl_in(kind, &scene, &path, 12.0).falls);
     }
     let total: u32 = falls.iter().sum();
     assert!(
@@ -443,13 +444,13 @@ pub fn pursues_the_path_round_an_arc_on_a_slope(kind: BackendKind) {
 /// rough,stairs`) rapier 2, MuJoCo 1 falls without `realign_above`, 0 and 0 with it
 /// at 1 rad (the built-in file).
 pub fn turns_back_at_a_corner_on_gravel_and_stairs(kind: BackendKind) {
-    use plamo_controller::{START_ACCEL, TurnPath, staggered_start};
+    use plamo_controller::{START_ACCEL, TurnPath};
     let mut falls = Vec::new();
     for terrain in ["terrain-rough", "terrain-stairs"] {
         let scene = plamo_scenes::builtin(terrain).unwrap();
         for r in 0..4 {
             let path = TurnPath {
-                start: staggered_start([5.0, 3.0], r),
+                start: strip_start(r),
                 speed: 1.0,
                 corner_speed: 1.0,
                 head_height: 0.4,
@@ -488,33 +489,17 @@ const TERRAIN_FALLS: u32 = 1;
 /// standing, 10 s): (terrain, speed, run, falls).
 #[cfg(feature = "mujoco")]
 fn terrain_falls(crawl: CrawlParams) -> Vec<(&'static str, f64, usize, u32)> {
-    use plamo_controller::staggered_start;
-    let settings = settings();
     let mut falls = Vec::new();
     for terrain in ["rough", "stairs"] {
         let scene = plamo_scenes::builtin(&format!("terrain-{terrain}")).unwrap();
         for speed in [0.5, 1.0] {
             for r in 0..4 {
                 let path = StraightPath {
-                    start: staggered_start([5.0, 3.0], r),
+                    start: strip_start(r),
                     speed,
                     head_height: 0.4,
                 };
-                let mut policy = ModelBasedController::with_all_params(
-                    GaitParams::default(),
-                    crawl,
-                    settings.clone(),
-                )
-                .unwrap();
-                let m = run_path(
-                    BackendKind::Mujoco,
-                    &scene,
-                    &path,
-                    10.0,
-                    &mut policy,
-                    &settings,
-                )
-                .unwrap();
+                let m = crawl_with(BackendKind::Mujoco, &scene, &path, 10.0, crawl);
                 falls.push((terrain, speed, r, m.falls));
             }
         }
@@ -588,27 +573,16 @@ const TURN_FALLS: u32 = 3;
 #[cfg(feature = "mujoco")]
 #[test]
 fn mujoco_gets_down_and_crawls_off_at_a_right_angle() {
-    use plamo_controller::staggered_start;
-    let settings = settings();
     let mut falls = Vec::new();
     for terrain in ["rough", "stairs"] {
         let scene = plamo_scenes::builtin(&format!("terrain-{terrain}")).unwrap();
         for r in 0..2 {
             let path = SidePath {
-                start: staggered_start([5.0, 3.0], r),
+                start: strip_start(r),
                 speed: 1.0,
                 side: if r % 2 == 0 { 1.0 } else { -1.0 },
             };
-            let mut policy = ModelBasedController::new(settings.clone()).unwrap();
-            let m = run_path(
-                BackendKind::Mujoco,
-                &scene,
-                &path,
-                8.0,
-                &mut policy,
-                &settings,
-            )
-            .unwrap();
+            let m = crawl_in(BackendKind::Mujoco, &scene, &path, 8.0);
             falls.push((terrain, r, m.falls));
         }
     }

@@ -1181,10 +1181,7 @@ impl CrawlGait {
         if self.aligning && heading_err.abs() < ALIGNED {
             self.aligning = false;
         }
-        if p.realign_above > 0.0
-            && heading_err.abs() > p.realign_above
-            && matches!(self.mode, Mode::Crawl)
-        {
+        if p.realign_above > 0.0 && heading_err.abs() > p.realign_above && self.settled() {
             self.aligning = true;
         }
         if self.aligning {
