@@ -303,17 +303,19 @@ pub fn stands_up_when_the_plan_rises(kind: BackendKind) {
 /// A plan that crawls (head 0.4 m) and at `up_at` goes on as a crouch-walk (head
 /// 0.8 m), both at `SPEED`: the random tours' crawl leg followed by a crouch-walk leg.
 struct CrouchAfterCrawl {
+    start: [f64; 2],
     up_at: f64,
 }
 
 impl HeadPath for CrouchAfterCrawl {
     fn point(&self, scene: &plamo_scenes::Scene, t: f64) -> Waypoint {
-        let x = SPEED * t.max(0.0);
+        let [x0, y] = self.start;
+        let x = x0 + SPEED * t.max(0.0);
         let head = if t < self.up_at { 0.4 } else { 0.8 };
         Waypoint {
             x,
-            y: 0.0,
-            z: scene.height_at(x, 0.0) + head,
+            y,
+            z: scene.height_at(x, y) + head,
             v: SPEED,
         }
     }
@@ -332,7 +334,10 @@ pub fn stands_up_into_a_crouch_walk(kind: BackendKind) {
     let settings = settings();
     let scene = flat_scene(12.0);
     let mut policy = ModelBasedController::new(settings.clone()).unwrap();
-    let path = CrouchAfterCrawl { up_at: 6.0 };
+    let path = CrouchAfterCrawl {
+        start: [0.0, 0.0],
+        up_at: 6.0,
+    };
     let m = run_path(kind, &scene, &path, 13.0, &mut policy, &settings).unwrap();
     let most = bounds(kind).crouch_falls;
     assert!(
@@ -344,6 +349,25 @@ pub fn stands_up_into_a_crouch_walk(kind: BackendKind) {
         !policy.is_crawling(),
         "{kind}: still crawling 7 s into the crouch-walk"
     );
+}
+
+/// The crouch-walk after a crawl on the gravel strip (four staggered starts, 12 s):
+/// the get-up straightened its legs with the centre of mass ahead of the ankles and
+/// tipped forward. Measured: MuJoCo 4, rapier 3 falls without `up_com_gain` (the
+/// built-in file's 10 /s), 0 and 1 with it.
+pub fn stands_up_on_gravel_into_a_crouch_walk(kind: BackendKind) {
+    let scene = plamo_scenes::builtin("terrain-rough").unwrap();
+    let falls: Vec<u32> = (0..4)
+        .map(|r| {
+            let path = CrouchAfterCrawl {
+                start: strip_start(r),
+                up_at: 6.0,
+            };
+            crawl_in(kind, &scene, &path, 12.0).falls
+        })
+        .collect();
+    let total: u32 = falls.iter().sum();
+    assert!(total <= 1, "{kind}: falls standing up on gravel: {falls:?}");
 }
 
 pub fn crawls_under_a_0_6_m_ceiling(kind: BackendKind) {
@@ -625,6 +649,10 @@ macro_rules! crawl_suite {
             #[test]
             fn stands_up_into_a_crouch_walk() {
                 super::stands_up_into_a_crouch_walk($kind);
+            }
+            #[test]
+            fn stands_up_on_gravel_into_a_crouch_walk() {
+                super::stands_up_on_gravel_into_a_crouch_walk($kind);
             }
             #[test]
             fn crawls_under_a_0_6_m_ceiling() {

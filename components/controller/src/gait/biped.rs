@@ -37,11 +37,11 @@ use super::params::GaitParams;
 use super::plan_ground::PlanGround;
 
 use plamo_interfaces::CONTROL_DT;
-use plamo_physics::humanoid::{BODIES, JOINTS, joint_index, shape_mass};
+use plamo_physics::humanoid::{BODIES, JOINTS, joint_index};
 use plamo_physics::{FEET, NUM_BODIES, NUM_JOINTS};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
-use super::{residual_force, residual_wrench};
+use super::{com_ahead, mass_fractions, residual_force, residual_wrench};
 use crate::math::{clamp_norm, smoothstep, sub3, wrap_angle};
 use crate::observation::{Observation, WAYPOINT_SPACING};
 use crate::policy::{Action, RootWrench};
@@ -162,12 +162,10 @@ impl BipedGait {
             thigh: -shin.offset[2],
             shin: -foot.offset[2],
         };
-        let masses = BODIES.map(|b| b.shapes.iter().map(shape_mass).sum::<f64>());
-        let total: f64 = masses.iter().sum();
         Self {
             params,
             settings,
-            mass_fraction: masses.map(|m| m / total),
+            mass_fraction: mass_fractions(),
             hip_offset: [right_thigh.offset, left_thigh.offset],
             hip_kp: JOINTS[joints.hip[0][1]].kp,
             joints,
@@ -452,12 +450,7 @@ impl BipedGait {
         let s = smoothstep(s_lin);
         // Forward placement is measured from the centre of mass (body origins weighted
         // by body mass): a leaning or crouching trunk carries it ahead of the pelvis.
-        let com_x: f64 = self
-            .mass_fraction
-            .iter()
-            .zip(&obs.body_pos)
-            .map(|(m, p)| m * p[0])
-            .sum();
+        let com_x = com_ahead(&self.mass_fraction, obs);
         let final_y = side_step(
             side(swing) * form.foot_width
                 + form.foot_lat_gain * vy

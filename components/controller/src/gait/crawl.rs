@@ -54,15 +54,15 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
 use plamo_interfaces::CONTROL_DT;
-use plamo_physics::NUM_JOINTS;
 use plamo_physics::humanoid::{BODIES, HEAD_OFFSET, JOINTS, body_index, joint_index};
+use plamo_physics::{FEET, NUM_BODIES, NUM_JOINTS};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
 use super::map_plane::MapPlane;
 use super::params::{parse_toml, read_params};
 use super::plan_ground::PlanGround;
 use super::plan_trace::PlanTrace;
-use super::{residual_force, residual_wrench};
+use super::{com_ahead, mass_fractions, residual_force, residual_wrench};
 use crate::error::{ControllerError, Result};
 use crate::math::{smoothstep, sub3, wrap_angle};
 use crate::observation::{Observation, WAYPOINT_SPACING};
@@ -353,6 +353,18 @@ pub struct CrawlParams {
     /// (RESULTS "Crawl", session 18). 0: off.
     #[serde(default)]
     pub realign_above: f64,
+    /// How far the centre of mass may be ahead of the ankles (heading frame) while
+    /// getting up before the residual pushes it back (`up_com_gain`) \[m\]. The get-up
+    /// after a crawl that arrived moving straightened its legs with the centre of
+    /// mass 0.14 m ahead and the straight body tipped onto its face; one that went
+    /// through held it at 0.09-0.12 m (RESULTS "Crawl", session 19).
+    #[serde(default)]
+    pub up_com_ahead: f64,
+    /// Backward speed the get-up's residual asks for per m the centre of mass is
+    /// further ahead of the ankles than `up_com_ahead` \[1/s\], on top of
+    /// `sit_back_speed`. 0: off.
+    #[serde(default)]
+    pub up_com_gain: f64,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -465,7 +477,9 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 69] = [
+        let ranges: [(&'static str, f64, f64, f64); 71] = [
+            ("up_com_gain", self.up_com_gain, 0.0, 100.0),
+            ("up_com_ahead", self.up_com_ahead, 0.0, 0.5),
             ("pursuit", self.pursuit, 0.0, 3.0),
             ("realign_above", self.realign_above, 0.0, PI),
             ("knee_step_up", self.knee_step_up, 0.0, 0.5),
@@ -810,6 +824,8 @@ pub(crate) struct CrawlGait {
     slope: f64,
     /// The plan's path behind its first waypoint (see `pursuit`).
     trace: PlanTrace,
+    /// Body masses over the total mass, for the centre of mass \[-\].
+    mass_fraction: [f64; NUM_BODIES],
     last_wrench: RootWrench,
 }
 
@@ -857,6 +873,7 @@ impl CrawlGait {
             rough: 0.0,
             slope: 0.0,
             trace: PlanTrace::default(),
+            mass_fraction: mass_fractions(),
             last_wrench: RootWrench::default(),
         }
     }
@@ -1241,13 +1258,13 @@ impl CrawlGait {
                     stand[j.ankle[leg][0]] = STAND[2];
                 }
                 self.through_squat(true, &self.from, &stand, t / p.up_time, targets);
+                let u = t / p.up_time;
                 self.mode = Mode::Up {
                     t: t + CONTROL_DT,
                     pitch0,
                     height0,
                 };
                 let stand_height = plamo_physics::humanoid::STANDING_PELVIS_HEIGHT - 0.02;
-                let u = t / p.up_time;
                 // Sitting back into the squat must let the pelvis sink onto the heels:
                 // no lift until the legs straighten.
                 let height = if u < p.squat_share {
@@ -1256,12 +1273,16 @@ impl CrawlGait {
                     let s2 = smoothstep((u - p.squat_share) / (1.0 - p.squat_share));
                     obs.root_height.min(height0) + s2 * (stand_height - height0).max(0.0)
                 };
-                // The hands push the body back over the feet while sitting back.
+                // The hands push the body back over the feet while sitting back. The
+                // legs must straighten under the centre of mass: ahead of the ankles,
+                // the straightening legs tipped the whole body onto its face.
+                let ankles = 0.5 * (obs.body_pos[FEET[0]][0] + obs.body_pos[FEET[1]][0]);
+                let ahead = com_ahead(&self.mass_fraction, obs) - ankles;
                 let back = if u < p.squat_share {
                     -p.sit_back_speed
                 } else {
                     0.0
-                };
+                } - p.up_com_gain * (ahead - p.up_com_ahead).max(0.0);
                 ([back, 0.0], pitch0 * (1.0 - s), height, 0.0)
             }
             Mode::Crawl => {
@@ -1586,6 +1607,57 @@ mod tests {
             ..p
         });
         assert!(off > 0.5, "without realign_above: {off} m/s");
+    }
+
+    #[test]
+    fn the_get_up_pushes_back_while_the_centre_of_mass_is_ahead_of_the_ankles() {
+        // Every body 0.1 m ahead of the root but the feet, 0.15 m behind it: the
+        // centre of mass is ~0.24 m ahead of the ankles.
+        let obs_with = |ahead: bool| {
+            let mut obs = crawling_obs();
+            for (b, p) in obs.body_pos.iter_mut().enumerate() {
+                *p = match (ahead, FEET.contains(&b)) {
+                    (false, _) => [0.0, 0.0, 0.0],
+                    (true, true) => [-0.15, 0.0, -0.4],
+                    (true, false) => [0.1, 0.0, 0.0],
+                };
+            }
+            obs
+        };
+        // The residual force forward in the sit-back's first step and in the
+        // straightening's first step.
+        let push = |params: CrawlParams, ahead: bool| {
+            let obs = obs_with(ahead);
+            let mut gait = CrawlGait::new(params, ControllerSettings::default());
+            gait.reset();
+            gait.begin_up(&obs);
+            let mut out = Action::default();
+            gait.act(&obs, &mut out);
+            let sit = gait.last_wrench().force[0];
+            for _ in 0..(params.squat_share * params.up_time / CONTROL_DT).ceil() as usize {
+                gait.act(&obs, &mut out);
+            }
+            [sit, gait.last_wrench().force[0]]
+        };
+        let off = CrawlParams {
+            up_com_ahead: 0.0,
+            up_com_gain: 0.0,
+            ..CrawlParams::default()
+        };
+        let on = CrawlParams {
+            up_com_ahead: 0.08,
+            up_com_gain: 10.0,
+            ..off
+        };
+        let [sit_off, lift_off] = push(off, true);
+        let [sit_on, lift_on] = push(on, true);
+        assert!(sit_on < sit_off - 50.0, "{sit_on} N against {sit_off} N");
+        assert!(
+            lift_on < lift_off - 50.0,
+            "{lift_on} N against {lift_off} N"
+        );
+        // Over the ankles: no extra push.
+        assert_eq!(push(on, false), push(off, false));
     }
 
     #[test]

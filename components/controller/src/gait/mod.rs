@@ -42,6 +42,28 @@ fn plan_lead(obs: &Observation) -> f64 {
     w[0].hypot(w[1]) - WAYPOINT_SPACING * obs.waypoint_speeds[0].max(0.0)
 }
 
+/// Each body's mass over the humanoid's total \[-\], physics body order.
+fn mass_fractions() -> [f64; NUM_BODIES] {
+    let masses = plamo_physics::humanoid::BODIES.map(|b| {
+        b.shapes
+            .iter()
+            .map(plamo_physics::humanoid::shape_mass)
+            .sum::<f64>()
+    });
+    let total: f64 = masses.iter().sum();
+    masses.map(|m| m / total)
+}
+
+/// Forward offset of the centre of mass from the root, heading frame \[m\]: body
+/// origins weighted by `fractions` (see [`mass_fractions`]).
+fn com_ahead(fractions: &[f64; NUM_BODIES], obs: &Observation) -> f64 {
+    fractions
+        .iter()
+        .zip(&obs.body_pos)
+        .map(|(m, p)| m * p[0])
+        .sum()
+}
+
 /// The residual force a gait asks for, heading frame \[N\]: the horizontal velocity
 /// error times `vel_gain` \[1/s\], and a height PD (`height_gain` \[1/s^2\] on the
 /// root height error, `height_damping` \[1/s\] on the vertical velocity) that only
