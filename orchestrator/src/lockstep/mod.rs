@@ -170,6 +170,9 @@ impl Lockstep {
             let root = self.world.agents[k].root_position;
             let boxed_in = tick == 0 && !stands_clear(&self.scene, root[0], root[1]);
             self.fallen[k] = fell || boxed_in;
+            if self.fallen[k] {
+                tracker.put_back();
+            }
         }
         if self.trackers.iter().all(AgentTracker::done) {
             return Ok(StepStatus::Finished);

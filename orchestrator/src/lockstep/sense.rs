@@ -53,6 +53,10 @@ pub(crate) struct AgentTracker {
     /// The requested head height the fall rule held the head to at the last judged
     /// step \[m\] (it rises at most at `fall_rise_rate`).
     fall_bar: f64,
+    /// Whether the humanoid was put back (a fall's reset, or a start with no room to
+    /// stand) since the last judged step: the bar then starts from the head of the
+    /// pose it was put in.
+    reset: bool,
 }
 
 struct Track {
@@ -104,7 +108,16 @@ impl AgentTracker {
             done: false,
             last_xy_error: 0.0,
             fall_bar: f64::INFINITY,
+            reset: false,
         }
+    }
+
+    /// The humanoid is being put back into a pose (its head height is judged at the
+    /// next step): a crawl pose under a top on a standing plan gets the time a crawler
+    /// needs to stand up, as where the plan asks for a taller form. Without it, the
+    /// fall rule judged the pose fallen the step after it was placed.
+    pub(crate) fn put_back(&mut self) {
+        self.reset = true;
     }
 
     /// Falls over every instruction so far (as the report counts them).
@@ -133,6 +146,11 @@ impl AgentTracker {
     fn judge(&self, scene: &Scene, s: &HumanoidState, plan: &PlanMessage) -> (bool, f64) {
         let h = s.head_position;
         let above = h[2] - scene.height_at(h[0], h[1]);
+        let fall_bar = if self.reset {
+            self.fall_bar.min(above)
+        } else {
+            self.fall_bar
+        };
         // The plan lowers the head below its form's height under low tops (a run leg
         // crawls through a gap): a head that follows it has not fallen.
         let w = plan.waypoints[0].position;
@@ -150,7 +168,7 @@ impl AgentTracker {
             .form_height
             .min(w[2] - scene.height_at(w[0], w[1]))
             .min(headroom)
-            .min(self.fall_bar + self.settings.fall_rise_rate * CONTROL_DT);
+            .min(fall_bar + self.settings.fall_rise_rate * CONTROL_DT);
         (
             self.settings.is_fallen(above, requested) || !above.is_finite(),
             requested,
@@ -170,6 +188,7 @@ impl AgentTracker {
         let t = tick.seconds();
         let (fallen, bar) = self.judge(scene, s, plan);
         self.fall_bar = bar;
+        self.reset = false;
         if self.done {
             return fallen;
         }
@@ -275,6 +294,42 @@ mod tests {
         s.root_position = [9.5, 20.4, 0.2];
         s.head_position = [9.9, 20.4, 0.1];
         assert!(tracker.is_fallen(&scene, &s, &plan));
+    }
+
+    /// A body put back on hands and knees (a start under a low top, a reset under one)
+    /// on a walking plan: judged from the pose's head, rising at the body's pace, not
+    /// fallen the step after it was placed; a body not put back with its head there is.
+    #[test]
+    fn a_body_put_back_crawling_gets_the_time_to_stand_up() {
+        let scene = plamo_scenes::builtin("playground").unwrap();
+        let settings = ControllerSettings::default();
+        let ([x, y], ground) = ([4.0, 11.0], scene.height_at(4.0, 11.0));
+        let mut plan = PlanMessage {
+            instruction_count: 2,
+            form_height: 1.47,
+            ..Default::default()
+        };
+        plan.waypoints[0].position = [x + 1.0, y, ground + 1.47];
+        let mut s = HumanoidState::default();
+        let mut judge = |tracker: &mut AgentTracker, head: f64, k: u64| {
+            s.root_position = [x, y, ground + 0.45];
+            s.head_position = [x + 0.3, y, ground + head];
+            plan.tick = k * 4;
+            tracker.observe(&scene, Tick(k * 4), &s, &plan, &AgentAction::default())
+        };
+        // Standing, then put back crawling: the crawl's head rises as it stands up.
+        let mut tracker = AgentTracker::new(2, settings.clone());
+        assert!(!judge(&mut tracker, 1.47, 0));
+        tracker.put_back();
+        let up = (1.47 - 0.4) / (settings.fall_rise_rate * CONTROL_DT);
+        for i in 1..=up.ceil() as u64 {
+            let head = (0.4 + settings.fall_rise_rate * CONTROL_DT * (i - 1) as f64).min(1.47);
+            assert!(!judge(&mut tracker, head, i), "standing up, step {i}");
+        }
+        // Not put back: the same crawl pose on the walking plan is fallen.
+        let mut tracker = AgentTracker::new(2, settings);
+        assert!(!judge(&mut tracker, 1.47, 0));
+        assert!(judge(&mut tracker, 0.4, 1));
     }
 
     /// A crouch-walk leg ends and a walk begins: the plan asks for 1.47 m at once, the
