@@ -118,6 +118,20 @@ fn strip_start(r: usize) -> [f64; 2] {
     plamo_controller::staggered_start([5.0, 3.0], r)
 }
 
+/// Falls of the built-in crawl in `kind` over `seconds` on `scene`, one rollout per
+/// strip start `r` in `0..runs`, each on the path `path(strip_start(r), r)`.
+fn strip_falls<P: HeadPath>(
+    kind: BackendKind,
+    scene: &plamo_scenes::Scene,
+    runs: usize,
+    seconds: f64,
+    path: impl Fn([f64; 2], usize) -> P,
+) -> Vec<u32> {
+    (0..runs)
+        .map(|r| crawl_in(kind, scene, &path(strip_start(r), r), seconds).falls)
+        .collect()
+}
+
 fn check(kind: BackendKind, m: &MetricsSummary, what: &str) {
     check_within(kind, m, bounds(kind).xy, what);
 }
@@ -357,15 +371,10 @@ pub fn stands_up_into_a_crouch_walk(kind: BackendKind) {
 /// built-in file's 10 /s), 0 and 1 with it.
 pub fn stands_up_on_gravel_into_a_crouch_walk(kind: BackendKind) {
     let scene = plamo_scenes::builtin("terrain-rough").unwrap();
-    let falls: Vec<u32> = (0..4)
-        .map(|r| {
-            let path = CrouchAfterCrawl {
-                start: strip_start(r),
-                up_at: 6.0,
-            };
-            crawl_in(kind, &scene, &path, 12.0).falls
-        })
-        .collect();
+    let falls = strip_falls(kind, &scene, 4, 12.0, |start, _| CrouchAfterCrawl {
+        start,
+        up_at: 6.0,
+    });
     let total: u32 = falls.iter().sum();
     assert!(total <= 1, "{kind}: falls standing up on gravel: {falls:?}");
 }
@@ -441,17 +450,13 @@ fn arc_slope_falls(kind: BackendKind) -> u32 {
 /// `pursuit` it follows the path itself.
 pub fn pursues_the_path_round_an_arc_on_a_slope(kind: BackendKind) {
     let scene = plamo_scenes::builtin("terrain-slope").unwrap();
-    let mut falls = Vec::new();
-    for r in 0..2 {
-        let path = ArcPath {
-            start: strip_start(r),
-            speed: 1.0,
-            head_height: 0.4,
-            straight: 2.0,
-            radius: if r % 2 == 0 { 3.0 } else { -3.0 },
-        };
-        falls.push(crawl_in(kind, &scene, &path, 12.0).falls);
-    }
+    let falls = strip_falls(kind, &scene, 2, 12.0, |start, r| ArcPath {
+        start,
+        speed: 1.0,
+        head_height: 0.4,
+        straight: 2.0,
+        radius: if r % 2 == 0 { 3.0 } else { -3.0 },
+    });
     let total: u32 = falls.iter().sum();
     assert!(
         total <= arc_slope_falls(kind),
@@ -472,19 +477,16 @@ pub fn turns_back_at_a_corner_on_gravel_and_stairs(kind: BackendKind) {
     let mut falls = Vec::new();
     for terrain in ["terrain-rough", "terrain-stairs"] {
         let scene = plamo_scenes::builtin(terrain).unwrap();
-        for r in 0..4 {
-            let path = TurnPath {
-                start: strip_start(r),
-                speed: 1.0,
-                corner_speed: 1.0,
-                head_height: 0.4,
-                first: 6.0,
-                turn: if r % 2 == 0 { 170f64 } else { -170.0 }.to_radians(),
-                accel: START_ACCEL,
-            };
-            let m = crawl_in(kind, &scene, &path, 11.0);
-            falls.push((terrain, r, m.falls));
-        }
+        let turns = strip_falls(kind, &scene, 4, 11.0, |start, r| TurnPath {
+            start,
+            speed: 1.0,
+            corner_speed: 1.0,
+            head_height: 0.4,
+            first: 6.0,
+            turn: if r % 2 == 0 { 170f64 } else { -170.0 }.to_radians(),
+            accel: START_ACCEL,
+        });
+        falls.extend(turns.into_iter().enumerate().map(|(r, f)| (terrain, r, f)));
     }
     let total: u32 = falls.iter().map(|f| f.2).sum();
     assert_eq!(total, 0, "{kind}: falls turning back: {falls:?}");
@@ -600,15 +602,12 @@ fn mujoco_gets_down_and_crawls_off_at_a_right_angle() {
     let mut falls = Vec::new();
     for terrain in ["rough", "stairs"] {
         let scene = plamo_scenes::builtin(&format!("terrain-{terrain}")).unwrap();
-        for r in 0..2 {
-            let path = SidePath {
-                start: strip_start(r),
-                speed: 1.0,
-                side: if r % 2 == 0 { 1.0 } else { -1.0 },
-            };
-            let m = crawl_in(BackendKind::Mujoco, &scene, &path, 8.0);
-            falls.push((terrain, r, m.falls));
-        }
+        let sides = strip_falls(BackendKind::Mujoco, &scene, 2, 8.0, |start, r| SidePath {
+            start,
+            speed: 1.0,
+            side: if r % 2 == 0 { 1.0 } else { -1.0 },
+        });
+        falls.extend(sides.into_iter().enumerate().map(|(r, f)| (terrain, r, f)));
     }
     let total: u32 = falls.iter().map(|f| f.2).sum();
     assert!(

@@ -1468,6 +1468,13 @@ mod tests {
         obs
     }
 
+    /// A crawl gait with `params`, down and crawling (reset from rest).
+    fn crawling_gait(params: CrawlParams) -> CrawlGait {
+        let mut gait = CrawlGait::new(params, ControllerSettings::default());
+        gait.reset();
+        gait
+    }
+
     /// Fill `obs`'s height map with `map(x, y)` at each sample (heading frame).
     fn fill_map(obs: &mut Observation, map: &dyn Fn(f64, f64) -> f64) {
         for r in 0..LOCAL_MAP_SIDE {
@@ -1563,8 +1570,7 @@ mod tests {
             obs.waypoint_speeds[i] = 1.0;
         }
         fill_map(&mut obs, &map);
-        let mut gait = CrawlGait::new(params, ControllerSettings::default());
-        gait.reset();
+        let mut gait = crawling_gait(params);
         let mut out = Action::default();
         for _ in 0..(4.0 / CONTROL_DT) as usize {
             gait.act(&obs, &mut out);
@@ -1578,8 +1584,7 @@ mod tests {
         // left (a crawl leg starting at a landmark); the speed commanded 1 s later.
         let speed_after_turn = |params: CrawlParams| {
             let mut obs = crawling_obs();
-            let mut gait = CrawlGait::new(params, ControllerSettings::default());
-            gait.reset();
+            let mut gait = crawling_gait(params);
             let mut out = Action::default();
             for (seconds, angle) in [(3.0, 0.0_f64), (1.0, 0.75 * PI)] {
                 for i in 0..NUM_WAYPOINTS {
@@ -1628,8 +1633,7 @@ mod tests {
         // straightening's first step.
         let push = |params: CrawlParams, ahead: bool| {
             let obs = obs_with(ahead);
-            let mut gait = CrawlGait::new(params, ControllerSettings::default());
-            gait.reset();
+            let mut gait = crawling_gait(params);
             gait.begin_up(&obs);
             let mut out = Action::default();
             gait.act(&obs, &mut out);
@@ -1694,8 +1698,7 @@ mod tests {
             let roll: f64 = 0.4;
             obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
             obs.root_ang_vel = [0.0, 0.0, 2.0];
-            let mut gait = CrawlGait::new(params, ControllerSettings::default());
-            gait.reset();
+            let mut gait = crawling_gait(params);
             gait.act(&obs, &mut Action::default());
             gait.last_wrench().torque[0]
         };
@@ -1723,8 +1726,7 @@ mod tests {
             let mut obs = crawling_obs();
             obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
             obs.root_ang_vel = [rate, 0.0, 0.0];
-            let mut gait = CrawlGait::new(params, ControllerSettings::default());
-            gait.reset();
+            let mut gait = crawling_gait(params);
             let mut out = Action::default();
             gait.act(&obs, &mut out);
             ["right_elbow", "left_elbow"].map(|n| out.pd_targets[idx(n)])
@@ -1774,8 +1776,7 @@ mod tests {
             let roll: f64 = 0.4;
             obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
             fill_map(&mut obs, map);
-            let mut gait = CrawlGait::new(params, ControllerSettings::default());
-            gait.reset();
+            let mut gait = crawling_gait(params);
             let mut out = Action::default();
             for _ in 0..(2.0 / CONTROL_DT) as usize {
                 gait.phase = 0.0;
@@ -1932,8 +1933,7 @@ mod tests {
                 obs.waypoints[i] = [x, 0.0, 0.0];
                 obs.waypoint_ground[i] = stairs(x + 0.6);
             }
-            let mut gait = CrawlGait::new(params, ControllerSettings::default());
-            gait.reset();
+            let mut gait = crawling_gait(params);
             let mut out = Action::default();
             for _ in 0..(1.5 / CONTROL_DT) as usize {
                 gait.act(&obs, &mut out);
@@ -2008,8 +2008,7 @@ mod tests {
             for i in 0..NUM_WAYPOINTS {
                 obs.waypoints[i] = [0.25 * i as f64, 0.0, 0.0];
             }
-            let mut gait = CrawlGait::new(params, ControllerSettings::default());
-            gait.reset();
+            let mut gait = crawling_gait(params);
             let mut out = Action::default();
             gait.act(&obs, &mut out);
             let j = gait.joints;
@@ -2054,8 +2053,7 @@ mod tests {
         obs: &Observation,
         read: impl Fn(&Joints, &[f64]) -> [f64; 2],
     ) -> Vec<[f64; 2]> {
-        let mut gait = CrawlGait::new(params, ControllerSettings::default());
-        gait.reset();
+        let mut gait = crawling_gait(params);
         let mut out = Action::default();
         (0..(1.0 / CONTROL_DT) as usize)
             .map(|_| {
