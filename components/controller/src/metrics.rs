@@ -170,13 +170,14 @@ impl MetricsSummary {
         let mean = |f: &dyn Fn(&Self) -> f64| runs.iter().map(f).sum::<f64>() / k;
         let max = |f: &dyn Fn(&Self) -> f64| runs.iter().map(f).fold(0.0, f64::max);
         format!(
-            "falls/run {:.2} xy {:.3} (max {:.2}) z {:.3} residual {:.3} (peak {:.3}) dir {:.3}",
+            "falls/run {:.2} xy {:.3} (max {:.2}) z {:.3} residual {:.3} (peak {:.3}) torque {:.1} N m dir {:.3}",
             mean(&|m| f64::from(m.falls)),
             mean(&|m| m.xy_err_mean),
             max(&|m| m.xy_err_max),
             mean(&|m| m.z_err_mean),
             mean(&|m| m.residual_force_mean),
             max(&|m| m.residual_force_peak),
+            mean(&|m| m.residual_torque_mean),
             mean(&|m| m.mean_reward.dir),
         )
     }
