@@ -41,7 +41,7 @@ use plamo_physics::humanoid::{BODIES, JOINTS, joint_index};
 use plamo_physics::{FEET, NUM_BODIES, NUM_JOINTS};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
-use super::{com_ahead, mass_fractions, residual_force, residual_wrench};
+use super::{com_offset, mass_fractions, residual_force, residual_wrench};
 use crate::math::{clamp_norm, smoothstep, sub3, wrap_angle};
 use crate::observation::{Observation, WAYPOINT_SPACING};
 use crate::policy::{Action, RootWrench};
@@ -450,7 +450,7 @@ impl BipedGait {
         let s = smoothstep(s_lin);
         // Forward placement is measured from the centre of mass (body origins weighted
         // by body mass): a leaning or crouching trunk carries it ahead of the pelvis.
-        let com_x = com_ahead(&self.mass_fraction, obs);
+        let com_x = com_offset(&self.mass_fraction, obs)[0];
         let final_y = side_step(
             side(swing) * form.foot_width
                 + form.foot_lat_gain * vy

@@ -55,14 +55,14 @@ use std::path::Path;
 
 use plamo_interfaces::CONTROL_DT;
 use plamo_physics::humanoid::{BODIES, HEAD_OFFSET, JOINTS, body_index, joint_index};
-use plamo_physics::{FEET, NUM_BODIES, NUM_JOINTS};
+use plamo_physics::{NUM_BODIES, NUM_JOINTS};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
 use super::map_plane::MapPlane;
 use super::params::{parse_toml, read_params};
 use super::plan_ground::PlanGround;
 use super::plan_trace::PlanTrace;
-use super::{com_ahead, mass_fractions, residual_force, residual_wrench};
+use super::{com_over_feet, mass_fractions, residual_force, residual_wrench};
 use crate::error::{ControllerError, Result};
 use crate::math::{smoothstep, sub3, wrap_angle};
 use crate::observation::{Observation, WAYPOINT_SPACING};
@@ -365,6 +365,18 @@ pub struct CrawlParams {
     /// `sit_back_speed`. 0: off.
     #[serde(default)]
     pub up_com_gain: f64,
+    /// How far the centre of mass may be behind the ankles (heading frame) while
+    /// getting down before the residual pushes it forward (`down_com_gain`) \[m\]. On
+    /// flat ground the squat holds it within 0.06 m; on a hillside falling away
+    /// behind the feet it went 0.27 m back and the body sat onto its back (RESULTS
+    /// "Crawl", session 20).
+    #[serde(default)]
+    pub down_com_behind: f64,
+    /// Forward speed the get-down's residual asks for per m the centre of mass is
+    /// further behind the ankles than `down_com_behind`, and sideways speed per m it is
+    /// outside the ankles' width \[1/s\]. 0: off.
+    #[serde(default)]
+    pub down_com_gain: f64,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -477,9 +489,11 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 71] = [
+        let ranges: [(&'static str, f64, f64, f64); 73] = [
             ("up_com_gain", self.up_com_gain, 0.0, 100.0),
+            ("down_com_gain", self.down_com_gain, 0.0, 100.0),
             ("up_com_ahead", self.up_com_ahead, 0.0, 0.5),
+            ("down_com_behind", self.down_com_behind, 0.0, 0.5),
             ("pursuit", self.pursuit, 0.0, 3.0),
             ("realign_above", self.realign_above, 0.0, PI),
             ("knee_step_up", self.knee_step_up, 0.0, 0.5),
@@ -1241,8 +1255,16 @@ impl CrawlGait {
                 } else {
                     Mode::Down { t, pitch0, height0 }
                 };
+                // Squatting on ground that falls away behind or beside the feet, the
+                // centre of mass left them and the body sat down the hill onto its
+                // back or side: the residual pushes it back over the feet.
+                let (com, band) = com_over_feet(&self.mass_fraction, obs);
+                let push = [
+                    p.down_com_gain * (-com[0] - p.down_com_behind).max(0.0),
+                    -p.down_com_gain * (com[1] - com[1].clamp(band[0], band[1])),
+                ];
                 (
-                    [0.0; 2],
+                    push,
                     pitch0 + s * (f.pelvis_pitch - pitch0),
                     height0 + s * (f.pelvis_height - height0),
                     0.0,
@@ -1276,8 +1298,7 @@ impl CrawlGait {
                 // The hands push the body back over the feet while sitting back. The
                 // legs must straighten under the centre of mass: ahead of the ankles,
                 // the straightening legs tipped the whole body onto its face.
-                let ankles = 0.5 * (obs.body_pos[FEET[0]][0] + obs.body_pos[FEET[1]][0]);
-                let ahead = com_ahead(&self.mass_fraction, obs) - ankles;
+                let ahead = com_over_feet(&self.mass_fraction, obs).0[0];
                 let back = if u < p.squat_share {
                     -p.sit_back_speed
                 } else {
@@ -1457,6 +1478,7 @@ impl CrawlGait {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use plamo_physics::FEET;
 
     /// An observation of the humanoid with its root 0.5 m up (a crawl's), the rest 0.
     fn crawling_obs() -> Observation {
@@ -1662,6 +1684,58 @@ mod tests {
         );
         // Over the ankles: no extra push.
         assert_eq!(push(on, false), push(off, false));
+    }
+
+    #[test]
+    fn the_get_down_pushes_the_centre_of_mass_back_over_the_feet() {
+        // Every body `com` off the root but the feet, at the root: the centre of mass
+        // is ~0.9 `com` off the ankles' midpoint.
+        let obs_with = |com: [f64; 2]| {
+            let mut obs = crawling_obs();
+            for (b, p) in obs.body_pos.iter_mut().enumerate() {
+                let foot_y = if b == FEET[0] { -0.1 } else { 0.1 };
+                *p = if FEET.contains(&b) {
+                    [0.0, foot_y, -0.9]
+                } else {
+                    [com[0], com[1], 0.0]
+                };
+            }
+            obs
+        };
+        // The residual force (forward, left) in the get-down's first step.
+        let push = |params: CrawlParams, com: [f64; 2]| {
+            let obs = obs_with(com);
+            let mut gait = crawling_gait(params);
+            gait.begin_down(&obs);
+            let mut out = Action::default();
+            gait.act(&obs, &mut out);
+            let f = gait.last_wrench().force;
+            [f[0], f[1]]
+        };
+        let off = CrawlParams {
+            down_com_behind: 0.0,
+            down_com_gain: 0.0,
+            ..CrawlParams::default()
+        };
+        let on = CrawlParams {
+            down_com_behind: 0.08,
+            down_com_gain: 10.0,
+            ..off
+        };
+        // 0.25 m behind the ankles: pushed forward.
+        let [fwd_off, _] = push(off, [-0.25, 0.0]);
+        let [fwd_on, _] = push(on, [-0.25, 0.0]);
+        assert!(fwd_on > fwd_off + 50.0, "{fwd_on} N against {fwd_off} N");
+        // 0.25 m left of the ankles (0.1 m each side): pushed right.
+        let [_, left_off] = push(off, [0.0, 0.25]);
+        let [_, left_on] = push(on, [0.0, 0.25]);
+        assert!(
+            left_on < left_off - 50.0,
+            "{left_on} N against {left_off} N"
+        );
+        // Over the feet, or within `down_com_behind` of the ankles: no push.
+        assert_eq!(push(on, [0.0, 0.05]), push(off, [0.0, 0.05]));
+        assert_eq!(push(on, [-0.05, 0.0]), push(off, [-0.05, 0.0]));
     }
 
     #[test]

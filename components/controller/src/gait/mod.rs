@@ -20,7 +20,7 @@ pub use crawl::{CRAWL_PARAMS_VERSION, CrawlParams, DEFAULT_CRAWL_PARAMS, HAND_CR
 pub use ik::{LegGeometry, leg_fk, leg_ik};
 pub use params::{DEFAULT_GAIT_PARAMS, FormParams, GAIT_PARAMS_VERSION, GaitParams, ResidualGains};
 
-use plamo_physics::{NUM_BODIES, NUM_JOINTS};
+use plamo_physics::{FEET, NUM_BODIES, NUM_JOINTS};
 
 use crate::error::{ControllerError, Result};
 use crate::math::{clamp_norm, from_heading_frame};
@@ -54,14 +54,25 @@ fn mass_fractions() -> [f64; NUM_BODIES] {
     masses.map(|m| m / total)
 }
 
-/// Forward offset of the centre of mass from the root, heading frame \[m\]: body
-/// origins weighted by `fractions` (see [`mass_fractions`]).
-fn com_ahead(fractions: &[f64; NUM_BODIES], obs: &Observation) -> f64 {
+/// Offset of the centre of mass from the root, heading frame (forward, left) \[m\]:
+/// body origins weighted by `fractions` (see [`mass_fractions`]).
+fn com_offset(fractions: &[f64; NUM_BODIES], obs: &Observation) -> [f64; 2] {
     fractions
         .iter()
         .zip(&obs.body_pos)
-        .map(|(m, p)| m * p[0])
-        .sum()
+        .fold([0.0; 2], |[x, y], (m, p)| [x + m * p[0], y + m * p[1]])
+}
+
+/// The centre of mass's offset from the midpoint of the ankles, heading frame
+/// (forward, left) \[m\], and the ankles' lateral positions (lower, upper) \[m\].
+fn com_over_feet(fractions: &[f64; NUM_BODIES], obs: &Observation) -> ([f64; 2], [f64; 2]) {
+    let com = com_offset(fractions, obs);
+    let (a, b) = (obs.body_pos[FEET[0]], obs.body_pos[FEET[1]]);
+    let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+    (
+        [com[0] - mid[0], com[1] - mid[1]],
+        [a[1].min(b[1]) - mid[1], a[1].max(b[1]) - mid[1]],
+    )
 }
 
 /// The residual force a gait asks for, heading frame \[N\]: the horizontal velocity
