@@ -135,7 +135,7 @@ fn pyramid_random_dynamic_are_deterministic_and_merge() {
         &["pyramid.md", "pyramid.png", "summary.csv"],
     );
     check_sweep(
-        &RandomScenes::new(3, 11).unwrap(),
+        &RandomScenes::new(3, 11, &[]).unwrap(),
         &["random.md", "random.png", "summary.csv"],
     );
     check_sweep(
@@ -291,7 +291,7 @@ fn a_random_tour_replays_with_plamo_run() {
             max_seconds: Some(4.0),
             ..opts(&out, 1, Shard::ALL)
         };
-        eval::run(&RandomScenes::new(1, 11).unwrap(), &o).unwrap();
+        eval::run(&RandomScenes::new(1, 11, &[]).unwrap(), &o).unwrap();
         let runs = read_runs(&out);
         let digest = runs.str(0, "digest").unwrap().to_string();
         let line = replay_line(&out, "random.md", "plamo run --scene random-11 ");

@@ -167,6 +167,10 @@ pub struct RandomArgs {
     /// Seed of the first scene (scene k: `plamo scenes random --seed S+k`).
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Forms the legs are drawn from, comma-separated (crawl, crouch-walk, walk, run;
+    /// default all four, the paper's tours). `--forms crawl`: every leg crawls.
+    #[arg(long, value_delimiter = ',')]
+    forms: Vec<String>,
 }
 
 /// Arguments of `plamo eval dynamic`.
@@ -280,7 +284,7 @@ pub fn run(cmd: EvalCommand) -> anyhow::Result<ExitCode> {
             )?,
             &a.sweep,
         ),
-        EvalCommand::Random(a) => sweep(&RandomScenes::new(a.scenes, a.seed)?, &a.sweep),
+        EvalCommand::Random(a) => sweep(&RandomScenes::new(a.scenes, a.seed, &a.forms)?, &a.sweep),
         EvalCommand::Dynamic(a) => sweep(&Dynamic::new(a.scenes, a.seed)?, &a.sweep),
         EvalCommand::Merge(a) => report(eval::merge(&a.dirs, &a.out), &a.out),
     }

@@ -47,21 +47,61 @@ pub struct RandomScenes {
     pub scenes: usize,
     /// Seed of the first scene (scene k is random scene seed + k).
     pub seed: u64,
+    /// The forms a leg is drawn from, each as likely (default: all of [`FORMS`]).
+    /// Fewer forms measure one form over many legs (`--forms crawl`: every leg
+    /// crawls); with all four the tours are the paper's.
+    #[serde(default = "all_forms")]
+    pub forms: Vec<String>,
+}
+
+fn all_forms() -> Vec<String> {
+    FORMS.iter().map(|f| f.to_string()).collect()
 }
 
 impl RandomScenes {
-    /// Check the parameters.
-    pub fn new(scenes: usize, seed: u64) -> anyhow::Result<Self> {
+    /// Check the parameters: at least one scene, and forms from [`FORMS`], each once
+    /// (none given: all four).
+    pub fn new(scenes: usize, seed: u64, forms: &[String]) -> anyhow::Result<Self> {
         if scenes == 0 {
             bail!("--scenes 0: need at least one scene");
         }
-        Ok(Self { scenes, seed })
+        for (i, f) in forms.iter().enumerate() {
+            if !FORMS.contains(&f.as_str()) {
+                bail!(
+                    "--forms: unknown form `{f}` (allowed: {})",
+                    FORMS.join(", ")
+                );
+            }
+            if forms[..i].contains(f) {
+                bail!("--forms: `{f}` given twice");
+            }
+        }
+        let forms = if forms.is_empty() {
+            all_forms()
+        } else {
+            forms.to_vec()
+        };
+        Ok(Self {
+            scenes,
+            seed,
+            forms,
+        })
+    }
+
+    /// Whether the legs are drawn from all four forms (the paper's tours).
+    fn all_forms(&self) -> bool {
+        self.forms == all_forms()
     }
 }
 
 /// The tour of random scene `scene_seed`: its landmarks in a random order, each leg in
-/// a random form ("Crawl from the tree to the car, then run to the bench, ...").
-pub fn tour(scene: &Scene, scene_seed: u64) -> anyhow::Result<String> {
+/// a form drawn from `forms` ("Crawl from the tree to the car, then run to the bench,
+/// ..."). With [`FORMS`] the tour is the paper's; the draws do not depend on the forms
+/// other than through their number.
+pub fn tour<S: AsRef<str>>(scene: &Scene, scene_seed: u64, forms: &[S]) -> anyhow::Result<String> {
+    if forms.is_empty() {
+        bail!("a tour needs at least one form");
+    }
     let mut names: Vec<&str> = scene.landmarks.iter().map(|l| l.name.as_str()).collect();
     if names.len() < 2 {
         bail!(
@@ -75,7 +115,7 @@ pub fn tour(scene: &Scene, scene_seed: u64) -> anyhow::Result<String> {
         let k = (splitmix(&mut st) % (i as u64 + 1)) as usize;
         names.swap(i, k);
     }
-    let mut form = || FORMS[(splitmix(&mut st) % FORMS.len() as u64) as usize];
+    let mut form = || forms[(splitmix(&mut st) % forms.len() as u64) as usize].as_ref();
     let mut text = format!("{} from the {} to the {}", form(), names[0], names[1]);
     for n in &names[2..] {
         text.push_str(&format!(", then {} to the {n}", form()));
@@ -223,7 +263,7 @@ impl Experiment for RandomScenes {
     ) -> anyhow::Result<Vec<String>> {
         let scene_seed = *job;
         let scene = plamo_scenes::random_scene(scene_seed);
-        let text = tour(&scene, scene_seed)?;
+        let text = tour(&scene, scene_seed, &self.forms)?;
         let ep = run_episode(&EpisodeSpec {
             scene: &scene,
             instructions: text.clone(),
@@ -316,17 +356,21 @@ impl Experiment for RandomScenes {
         }
         let (lo, hi) = wilson(counts[0], n, Z95);
         let rate = counts[0] as f64 / n.max(1) as f64;
-        let args = format!(" --scenes {} --seed {}", self.scenes, self.seed);
+        let mut args = format!(" --scenes {} --seed {}", self.scenes, self.seed);
+        if !self.all_forms() {
+            args.push_str(&format!(" --forms {}", self.forms.join(",")));
+        }
         let mut md = format!(
             "Command: `{}`\n\n\
              {n} random scenes (seeds {}..{}), each a tour of its 4 landmarks in random forms \
-             (crawl, crouch-walk, walk, run). Success = all four landmarks reached without a \
+             ({}). Success = all four landmarks reached without a \
              fall.\n\n\
              **Success: {}/{n} = {:.0}% (95% Wilson interval {:.0}-{:.0}%)**; paper: 81%.\n\n\
              | outcome | runs | share |\n|---|---|---|\n",
             command_line(meta, &args),
             self.seed,
             self.seed + self.scenes as u64 - 1,
+            self.forms.join(", "),
             counts[0],
             100.0 * rate,
             100.0 * lo,
@@ -415,6 +459,49 @@ mod tests {
             .find(|l| l.starts_with(&format!("| {form} |")))
             .unwrap();
         row.split('|').nth(col).unwrap().trim()
+    }
+
+    #[test]
+    fn tours_draw_their_forms_from_the_forms_asked_for() {
+        let scene = plamo_scenes::random_scene(0);
+        // All four forms: the paper's tours, the draws as before `--forms` (the
+        // tour in results/*/random/runs.csv for scene 0).
+        let all = RandomScenes::new(1, 0, &[]).unwrap();
+        assert_eq!(all.forms, FORMS);
+        assert_eq!(
+            tour(&scene, 0, &all.forms).unwrap(),
+            "Run from the rock to the kiosk, then walk to the fountain, then crouch-walk to \
+             the statue"
+        );
+        // Crawl only: every leg crawls, through the same landmarks.
+        let crawl = RandomScenes::new(1, 0, &["crawl".to_string()]).unwrap();
+        assert_eq!(
+            tour(&scene, 0, &crawl.forms).unwrap(),
+            "Crawl from the rock to the kiosk, then crawl to the fountain, then crawl to the \
+             statue"
+        );
+        // Two forms: only those two.
+        let two = ["walk".to_string(), "run".to_string()];
+        for seed in 0..20 {
+            let scene = plamo_scenes::random_scene(seed);
+            let t = tour(&scene, seed, &two).unwrap().to_lowercase();
+            assert!(!t.contains("crawl"), "{t}");
+        }
+    }
+
+    #[test]
+    fn unknown_or_repeated_forms_are_refused_naming_the_allowed_ones() {
+        let e = RandomScenes::new(1, 0, &["crawll".to_string()])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`crawll`") && e.contains("crawl, crouch-walk, walk, run"),
+            "{e}"
+        );
+        let e = RandomScenes::new(1, 0, &["walk".to_string(), "walk".to_string()])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`walk` given twice"), "{e}");
     }
 
     #[test]
