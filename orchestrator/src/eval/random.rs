@@ -50,11 +50,11 @@ pub struct RandomScenes {
     /// The forms a leg is drawn from, each as likely (default: all of [`FORMS`]).
     /// Fewer forms measure one form over many legs (`--forms crawl`: every leg
     /// crawls); with all four the tours are the paper's.
-    #[serde(default = "all_forms")]
+    #[serde(default = "default_forms")]
     pub forms: Vec<String>,
 }
 
-fn all_forms() -> Vec<String> {
+fn default_forms() -> Vec<String> {
     FORMS.iter().map(|f| f.to_string()).collect()
 }
 
@@ -77,7 +77,7 @@ impl RandomScenes {
             }
         }
         let forms = if forms.is_empty() {
-            all_forms()
+            default_forms()
         } else {
             forms.to_vec()
         };
@@ -89,8 +89,8 @@ impl RandomScenes {
     }
 
     /// Whether the legs are drawn from all four forms (the paper's tours).
-    fn all_forms(&self) -> bool {
-        self.forms == all_forms()
+    fn draws_all_forms(&self) -> bool {
+        self.forms == default_forms()
     }
 }
 
@@ -357,7 +357,7 @@ impl Experiment for RandomScenes {
         let (lo, hi) = wilson(counts[0], n, Z95);
         let rate = counts[0] as f64 / n.max(1) as f64;
         let mut args = format!(" --scenes {} --seed {}", self.scenes, self.seed);
-        if !self.all_forms() {
+        if !self.draws_all_forms() {
             args.push_str(&format!(" --forms {}", self.forms.join(",")));
         }
         let mut md = format!(

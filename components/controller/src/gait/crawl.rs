@@ -1258,11 +1258,15 @@ impl CrawlGait {
                 // Squatting on ground that falls away behind or beside the feet, the
                 // centre of mass left them and the body sat down the hill onto its
                 // back or side: the residual pushes it back over the feet.
-                let (com, band) = com_over_feet(&self.mass_fraction, obs);
-                let push = [
-                    p.down_com_gain * (-com[0] - p.down_com_behind).max(0.0),
-                    -p.down_com_gain * (com[1] - com[1].clamp(band[0], band[1])),
-                ];
+                let push = if p.down_com_gain > 0.0 {
+                    let (com, band) = com_over_feet(&self.mass_fraction, obs);
+                    [
+                        p.down_com_gain * (-com[0] - p.down_com_behind).max(0.0),
+                        -p.down_com_gain * (com[1] - com[1].clamp(band[0], band[1])),
+                    ]
+                } else {
+                    [0.0; 2]
+                };
                 (
                     push,
                     pitch0 + s * (f.pelvis_pitch - pitch0),
