@@ -23,7 +23,8 @@
 //! head ends after the get-down (0.7 m ahead of the standing head), so the errors measure the crawl's tracking, not
 //! the get-down's lag behind a plan that left at once. `PLAMO_PHYSICS_PARAMS=FILE`: physics
 //! settings other than the defaults (a `--physics-params` file), for an A/B on one binary.
-//! In `trace`, `PLAMO_TRACE_CONTACTS=1` lists the bodies touching the terrain.
+//! `PLAMO_SWEEP_LENGTH=M`: built scenes (flat, ceiling, ledge) M m long (the crawl suite's
+//! ledge is 12 m). `PLAMO_SWEEP_PER_RUN=1`: a line per run too. In `trace`, `PLAMO_TRACE_CONTACTS=1` lists the bodies touching the terrain.
 use std::error::Error;
 
 use plamo_controller::{
@@ -90,7 +91,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                         )
                         .unwrap();
                         let (scene, origin) =
-                            terrain_scene(terrain, speed * duration + 10.0).unwrap();
+                            terrain_scene(terrain, scene_length(speed, duration).unwrap()).unwrap();
                         let start = staggered_start(origin, r);
                         let path: Box<dyn HeadPath> = if drop {
                             Box::new(DropPath {
@@ -169,6 +170,16 @@ fn main() -> Result<(), Box<dyn Error>> {
                     })
                     .collect();
                 let diverged = ms.iter().filter(|m| m.is_none()).count();
+                if std::env::var_os("PLAMO_SWEEP_PER_RUN").is_some() {
+                    for (r, m) in ms.iter().enumerate() {
+                        if let Some(m) = m {
+                            println!(
+                                "  run {r}: falls {} xy {:.3} (max {:.2})",
+                                m.falls, m.xy_err_mean, m.xy_err_max
+                            );
+                        }
+                    }
+                }
                 let ms: Vec<MetricsSummary> = ms.into_iter().flatten().collect();
                 println!(
                     "{terrain} {engine:?} {speed:.2} m/s: {}{}",
@@ -370,6 +381,16 @@ impl HeadPath for DropPath {
     }
 }
 
+/// Length of a built scene \[m\]: `PLAMO_SWEEP_LENGTH`, else what the run needs and
+/// 10 m more. The crawl suite's ledge is 12 m long; another length is another height
+/// grid, and rapier's contacts (and the rollout) differ with it.
+fn scene_length(speed: f64, duration: f64) -> Result<f64, Box<dyn Error>> {
+    Ok(match std::env::var("PLAMO_SWEEP_LENGTH") {
+        Ok(v) => v.parse()?,
+        Err(_) => speed * duration + 10.0,
+    })
+}
+
 /// One straight rollout, printing the head, pelvis and contacts every 0.25 s.
 fn trace(
     engine: BackendKind,
@@ -387,7 +408,7 @@ fn trace(
     let mut policy =
         ModelBasedController::with_all_params(GaitParams::default(), crawl, settings.clone())?;
     let terrain = std::env::var("PLAMO_TRACE_TERRAIN").unwrap_or_else(|_| "flat".into());
-    let (scene, origin) = terrain_scene(&terrain, speed * duration + 10.0)?;
+    let (scene, origin) = terrain_scene(&terrain, scene_length(speed, duration)?)?;
     // Start offsets as in the sweep's run `PLAMO_TRACE_RUN` (default 0).
     let r: usize = std::env::var("PLAMO_TRACE_RUN")
         .ok()
