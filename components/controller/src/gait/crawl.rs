@@ -29,9 +29,9 @@
 //!   landing point too (`swing_ahead`), and the head keeps `head_clear` over the
 //!   ground under it: the body rises, the stance hands push (`head_push`) (all three
 //!   on in the shipped file). Where the body rolls, the low side's limbs reach down
-//!   and the high side's draw up (`roll_reach`, `roll_rate_reach`, off in the shipped
-//!   file; beyond `roll_reach_from`, on smooth ground only with
-//!   `roll_reach_smooth_only`).
+//!   and the high side's draw up (`roll_reach`, on in the shipped file, and
+//!   `roll_rate_reach`, off; beyond `roll_reach_from`, on smooth ground only with
+//!   `roll_reach_smooth_only`; a swinging limb only draws up).
 //! - With `forearms` (on in the built-in `params/crawl.toml`, off in
 //!   `params/crawl-hands.toml`) the arms carry the front on the forearms: each arm's
 //!   contact is its elbow, the upper arm aimed at it and the forearm laid forward
@@ -289,7 +289,9 @@ pub struct CrawlParams {
     pub swing_ahead: bool,
     /// Contact height offset per rad of roll per m of lever, on top of
     /// `attitude_gain`'s \[-\]: the limbs on the low side reach down and those on the
-    /// high side draw up (at most `MAX_ROLL_REACH` each). On flat ground the crawl's
+    /// high side draw up (at most `MAX_ROLL_REACH` each; a swinging limb only draws
+    /// up: reaching down mid-swing took its clearance, and rapier's crawl stalled at
+    /// a 0.15 m ledge with a knee or elbow against its face). On flat ground the crawl's
     /// falls were mostly slow roll-overs over an arm (roll growing over 1-2 s, the arms
     /// not folding; RESULTS "Crawl", session 13), which `attitude_gain`'s 0.22 (2.5 cm
     /// at 0.5 rad for a hand) barely answers. 0: off.
@@ -1412,8 +1414,9 @@ impl CrawlGait {
                         1.0
                     };
                     let per_lever = smooth * (p.roll_reach * lean + p.roll_rate_reach * wx);
-                    for (c, n) in contacts.iter_mut().zip(&nominal) {
-                        c[2] += (per_lever * n[1]).clamp(-MAX_ROLL_REACH, MAX_ROLL_REACH);
+                    for ((c, n), l) in contacts.iter_mut().zip(&nominal).zip(&lift) {
+                        let reach = (per_lever * n[1]).clamp(-MAX_ROLL_REACH, MAX_ROLL_REACH);
+                        c[2] += if *l > 0.0 { reach.max(0.0) } else { reach };
                     }
                 }
                 if p.head_push > 0.0 {
@@ -1843,6 +1846,51 @@ mod tests {
         assert_eq!(elbows(off, 0.15, 0.0), elbows(from, 0.15, 0.0));
         let ([r0, _], [r1, _]) = (elbows(off, 0.4, 0.0), elbows(from, 0.4, 0.0));
         assert!(r1.abs() < r0.abs() - 0.02, "right {r0} -> {r1}");
+    }
+
+    #[test]
+    fn a_swinging_limb_on_the_low_side_keeps_its_clearance_under_roll_reach() {
+        // Right arm targets (shoulder pitch, elbow) and whether it swings, one step
+        // from `phase`, rolled 0.3 rad right side low (the forearm crawl: its elbow is
+        // the contact, placed by the shoulder and elbow together).
+        let right_arm = |params: CrawlParams, phase: f64| {
+            let mut obs = crawling_obs();
+            let roll: f64 = 0.3;
+            obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
+            let mut gait = crawling_gait(params);
+            gait.phase = phase;
+            let mut out = Action::default();
+            gait.act(&obs, &mut out);
+            let t = ["right_shoulder_y", "right_elbow"].map(|n| out.pd_targets[idx(n)]);
+            (t, gait.in_swing[2])
+        };
+        let off = CrawlParams {
+            roll_reach: 0.0,
+            roll_rate_reach: 0.0,
+            ..CrawlParams::default()
+        };
+        let on = CrawlParams {
+            roll_reach: 1.0,
+            ..off
+        };
+        let (mut swings, mut stances) = (0, 0);
+        for k in 0..40 {
+            let phase = k as f64 / 40.0;
+            let ((t0, swing), (t1, _)) = (right_arm(off, phase), right_arm(on, phase));
+            if swing {
+                // Reaching down mid-swing lowered the arm into a ledge's face: rapier's
+                // crawl stalled or fell at the crawl suite's 0.15 m ledge.
+                assert_eq!(t0, t1, "phase {phase}: the swinging arm reached down");
+                swings += 1;
+            } else if t0 != t1 {
+                stances += 1;
+            }
+        }
+        assert!(swings > 0, "no phase with the right arm in swing");
+        assert!(
+            stances > 10,
+            "the right arm reached down in only {stances} stance phases"
+        );
     }
 
     #[test]
