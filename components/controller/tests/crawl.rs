@@ -365,18 +365,28 @@ pub fn stands_up_into_a_crouch_walk(kind: BackendKind) {
     );
 }
 
-/// The crouch-walk after a crawl on the gravel strip (four staggered starts, 12 s):
-/// the get-up straightened its legs with the centre of mass ahead of the ankles and
-/// tipped forward. Measured: MuJoCo 4, rapier 3 falls without `up_com_gain` (the
-/// built-in file's 10 /s), 0 and 1 with it.
+/// The crouch-walk after a crawl on the gravel strip (12 staggered starts, 12 s): the
+/// get-up straightened its legs with the centre of mass ahead of the ankles and
+/// tipped forward. Measured over the 12 starts: without `up_com_gain` MuJoCo 10,
+/// rapier 11 falls; with it (the built-in file's 10 /s) 2 and 5, with and without
+/// `roll_reach` alike. Four starts (until session 21) were too few to tell the
+/// get-up's rate from which starts fell: the first four fell 0 / 1 times without
+/// `roll_reach` and 2 / 3 with it (MuJoCo / rapier), out of the same 2 / 5 over 12.
 pub fn stands_up_on_gravel_into_a_crouch_walk(kind: BackendKind) {
     let scene = plamo_scenes::builtin("terrain-rough").unwrap();
-    let falls = strip_falls(kind, &scene, 4, 12.0, |start, _| CrouchAfterCrawl {
+    let falls = strip_falls(kind, &scene, 12, 12.0, |start, _| CrouchAfterCrawl {
         start,
         up_at: 6.0,
     });
     let total: u32 = falls.iter().sum();
-    assert!(total <= 1, "{kind}: falls standing up on gravel: {falls:?}");
+    let most = match kind {
+        BackendKind::Rapier => 7,
+        BackendKind::Mujoco => 4,
+    };
+    assert!(
+        total <= most,
+        "{kind}: {total} falls standing up on gravel over 12 starts (at most {most}): {falls:?}"
+    );
 }
 
 pub fn crawls_under_a_0_6_m_ceiling(kind: BackendKind) {
