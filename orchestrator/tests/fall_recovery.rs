@@ -186,8 +186,13 @@ fn a_fall_under_a_low_ceiling_is_reset_on_hands_and_knees_and_crawls_on() {
     let scene = spec.load_scene().unwrap();
     let links = spec.in_process(&scene).unwrap();
     // Just under the ceiling's edge (x = 4): the crawl slows to ~0.1-0.2 m/s under
-    // it, so a fall further in leaves too little of the run to show it crawls on.
-    let (o, _) = drive(links, &spec, 4.5, 22.0);
+    // it, so a fall further in leaves too little of the run to show it crawls on. Not
+    // further than 4.2 m: going in, the crawl's back catches the edge and it rolls
+    // (root at 4.1-4.4 m, 8-10 s in; MuJoCo, seed 1, with `roll_reach` it lay on its
+    // side there until a real fall at 21 s, before the root reached 4.4 m), and this
+    // test is about the reset under the ceiling, not that entry (`crawl_sweep ...
+    // ceiling`: 0.1-0.25 falls per run in both engines).
+    let (o, _) = drive(links, &spec, 4.2, 22.0);
     // The forced fall's reset: on hands and knees, under the ceiling, where it fell
     // (or up to two advances further along, when it follows real falls there).
     let (_, form, x, y) = o.forced.expect("the forced fall happened");
