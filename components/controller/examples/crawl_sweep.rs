@@ -24,7 +24,8 @@
 //! the get-down's lag behind a plan that left at once. `PLAMO_PHYSICS_PARAMS=FILE`: physics
 //! settings other than the defaults (a `--physics-params` file), for an A/B on one binary.
 //! `PLAMO_SWEEP_LENGTH=M`: built scenes (flat, ceiling, ledge) M m long (the crawl suite's
-//! ledge is 12 m). `PLAMO_SWEEP_PER_RUN=1`: a line per run too. In `trace`, `PLAMO_TRACE_CONTACTS=1` lists the bodies touching the terrain.
+//! ledge is 12 m). `PLAMO_SWEEP_PER_RUN=1`: a line per run too. In `trace`,
+//! `PLAMO_TRACE_CONTACTS=1` lists the bodies touching the terrain.
 use std::error::Error;
 
 use plamo_controller::{
@@ -76,11 +77,14 @@ fn main() -> Result<(), Box<dyn Error>> {
         Ok(v) => v.parse()?,
         Err(_) => 0.0,
     };
+    let per_run = std::env::var_os("PLAMO_SWEEP_PER_RUN").is_some();
     let terrains: Vec<String> = arg(6, "flat").split(',').map(String::from).collect();
     let physics = physics_settings()?;
     for terrain in &terrains {
         for &engine in &engines {
             for &speed in &speeds {
+                // One scene for the cell's runs: they differ only in where they start.
+                let (scene, origin) = terrain_scene(terrain, scene_length(speed, duration)?)?;
                 let ms: Vec<Option<MetricsSummary>> = (0..runs)
                     .into_par_iter()
                     .map(|r| {
@@ -90,8 +94,6 @@ fn main() -> Result<(), Box<dyn Error>> {
                             settings.clone(),
                         )
                         .unwrap();
-                        let (scene, origin) =
-                            terrain_scene(terrain, scene_length(speed, duration).unwrap()).unwrap();
                         let start = staggered_start(origin, r);
                         let path: Box<dyn HeadPath> = if drop {
                             Box::new(DropPath {
@@ -170,7 +172,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                     })
                     .collect();
                 let diverged = ms.iter().filter(|m| m.is_none()).count();
-                if std::env::var_os("PLAMO_SWEEP_PER_RUN").is_some() {
+                if per_run {
                     for (r, m) in ms.iter().enumerate() {
                         if let Some(m) = m {
                             println!(
