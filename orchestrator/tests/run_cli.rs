@@ -226,6 +226,42 @@ fn a_sigkilled_component_stops_the_run_and_leaves_no_files() {
     assert_eq!(leftovers(run), Vec::<PathBuf>::new());
 }
 
+#[test]
+fn a_reader_that_goes_away_still_gets_the_output_folder_written() {
+    // `plamo run ... | head -1`, with the reader gone before the summary: the run
+    // must still write its folder and stop its components, without a panic.
+    let run = "cli-test-closed-stdout";
+    let out = out_dir("closed-stdout");
+    let mut orch = plamo(&[
+        "--instructions",
+        ROUTE,
+        "--max-seconds",
+        "2",
+        "--processes",
+        "--run",
+        run,
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .stdout(Stdio::piped())
+    .stderr(Stdio::piped())
+    .spawn()
+    .unwrap();
+    drop(orch.stdout.take());
+    let status =
+        wait_with_deadline(&mut orch, Duration::from_secs(120)).expect("orchestrator hangs");
+    let mut err = String::new();
+    std::io::Read::read_to_string(orch.stderr.as_mut().unwrap(), &mut err).unwrap();
+    assert!(!err.contains("panicked"), "{err}");
+    // Timed out after 2 s: the route is not done, which is a failure, not a crash.
+    assert_eq!(status.code(), Some(1), "{err}");
+    for f in ["trajectory.csv", "metrics.json", "replay.glb"] {
+        assert!(out.join(f).exists(), "{f} not written; stderr: {err}");
+    }
+    assert_eq!(component_pids(run), vec![], "components left running");
+    assert_eq!(leftovers(run), Vec::<PathBuf>::new());
+}
+
 /// A 3 s multi-process run whose physics process has `fault`; it must fail. Returns
 /// its stderr.
 fn failing_run_with_fault(run: &str, fault: &str) -> String {

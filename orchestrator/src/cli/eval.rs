@@ -198,8 +198,8 @@ pub struct MergeArgs {
 }
 
 fn report(md: anyhow::Result<String>, out: &std::path::Path) -> anyhow::Result<ExitCode> {
-    println!("{}", md?);
-    println!("wrote {}", out.display());
+    say!("{}", md?);
+    say!("wrote {}", out.display());
     Ok(ExitCode::SUCCESS)
 }
 
@@ -365,7 +365,7 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
         c.residual_peak = c.residual_peak.max(m.residual_force_peak);
     }
     let md = markdown(&cells, &a);
-    println!("{md}");
+    say!("{md}");
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     std::fs::write(a.out.join("locomotion.md"), &md)?;
     std::fs::write(
@@ -373,7 +373,7 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
         serde_json::to_string_pretty(&cells)?,
     )?;
     plot(&cells, &a.out.join("locomotion.png"))?;
-    println!("wrote {}", a.out.display());
+    say!("wrote {}", a.out.display());
     Ok(ExitCode::SUCCESS)
 }
 

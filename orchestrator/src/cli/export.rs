@@ -17,7 +17,7 @@ pub struct ExportArgs {
 /// Run `plamo export`.
 pub fn run(args: ExportArgs) -> anyhow::Result<ExitCode> {
     for p in plamo::export::export_dir(&args.dir)? {
-        println!("wrote {}", p.display());
+        say!("wrote {}", p.display());
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -38,7 +38,7 @@ pub fn run(cmd: FmuCommand) -> anyhow::Result<ExitCode> {
                 None => find_library()?,
             };
             for fmu in package_all(&library, &args.out, &args.resources)? {
-                println!(
+                say!(
                     "wrote {} ({}, GUID {})",
                     fmu.path.display(),
                     fmu.model_name,

@@ -3,6 +3,15 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+/// `println!` for what a command reports on stdout. A reader that goes away
+/// (`plamo run ... | head -1`) ends the report, not the command: `println!` panicked
+/// there, before a run wrote its output folder and shut its components down.
+macro_rules! say {
+    ($($arg:tt)*) => {
+        $crate::cli::say_line(format_args!($($arg)*))
+    };
+}
+
 mod component;
 mod eval;
 mod export;
@@ -60,5 +69,18 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Fmu(cmd) => fmu::run(cmd),
         Command::Export(args) => export::run(args),
         Command::View(args) => view::run(args),
+    }
+}
+
+/// Writes one line of a command's report to stdout (see `say!`). A closed pipe is
+/// not an error; any other write error is told on stderr once per line, and the
+/// command goes on with what it was doing.
+pub(crate) fn say_line(line: std::fmt::Arguments) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = writeln!(out, "{line}").and_then(|()| out.flush())
+        && e.kind() != std::io::ErrorKind::BrokenPipe
+    {
+        eprintln!("warning: could not write to stdout: {e}");
     }
 }

@@ -233,7 +233,7 @@ pub fn run(args: PlanArgs) -> anyhow::Result<ExitCode> {
         &profile_path,
     )?;
 
-    println!(
+    say!(
         "planned {} instruction(s) on `{}` in {:.1} ms: {:.1} m, {:.1} s",
         route.len(),
         scene.name,
@@ -243,7 +243,7 @@ pub fn run(args: PlanArgs) -> anyhow::Result<ExitCode> {
     );
     for (tr, ins) in route.iter().zip(planner.instructions()) {
         let v_top = tr.points.iter().map(|p| p.v).fold(0.0, f64::max);
-        println!(
+        say!(
             "  {:<45} {:>6.1} m {:>6.1} s  top {:.2} m/s",
             ins.text,
             tr.length(),
@@ -251,7 +251,7 @@ pub fn run(args: PlanArgs) -> anyhow::Result<ExitCode> {
             v_top
         );
     }
-    println!(
+    say!(
         "wrote {}, {}, {}",
         json_path.display(),
         map_path.display(),

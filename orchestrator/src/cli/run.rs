@@ -322,7 +322,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         StepStatus::Finished => "finished",
         _ => "timed out",
     };
-    println!(
+    say!(
         "{} on `{}` ({}, {} agent(s), {}): {status_text} after {sim_s:.2} s simulated",
         if args.processes {
             "multi-process"
@@ -343,7 +343,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         for (r, text) in results.iter().zip(names) {
             all_ok &= r.success;
             let m = &r.metrics;
-            println!(
+            say!(
                 "  agent {k} [{}] {text:<40} {:>6.1} s  xy {:.2} m  z {:.2} m  falls {}  residual {:.1}% / {:.1}% m g",
                 if r.success {
                     "ok"
@@ -365,7 +365,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
     let (phys_med, phys_p99) = median_p99(&times.physics);
     let (plan_med, plan_p99) = median_p99(&times.planners);
     let (ctl_med, ctl_p99) = median_p99(&times.controllers);
-    println!(
+    say!(
         "wall {wall_s:.2} s (setup {setup_s:.2} s, loop {loop_s:.2} s), real-time factor {:.1}x{}",
         sim_s / loop_s.max(1e-9),
         if args.realtime {
@@ -374,7 +374,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
             String::new()
         }
     );
-    println!(
+    say!(
         "per control step [us] median/p99: step {:.0}/{:.0}, physics {:.0}/{:.0}, planners {:.0}/{:.0}, controllers {:.0}/{:.0}",
         step_med * 1e6,
         step_p99 * 1e6,
@@ -385,7 +385,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         ctl_med * 1e6,
         ctl_p99 * 1e6
     );
-    println!("trajectory digest {digest:016x}");
+    say!("trajectory digest {digest:016x}");
 
     if let (Some(dir), Some(rec)) = (&args.out, recorder.as_mut()) {
         rec.finish()?;
@@ -403,7 +403,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         )?;
         plamo::record::write_scene(dir, &scene)?;
         plamo::export::export_dir(dir)?;
-        println!(
+        say!(
             "wrote {} (replay.glb, motion.bvh, replay.mcap; watch it: plamo view {0})",
             dir.display()
         );

@@ -49,7 +49,7 @@ pub fn run(cmd: ScenesCommand) -> anyhow::Result<ExitCode> {
         ScenesCommand::List => {
             for name in plamo_scenes::builtin_names() {
                 let s = plamo_scenes::builtin(name)?;
-                println!("{name:<16} {}", s.description);
+                say!("{name:<16} {}", s.description);
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -64,15 +64,15 @@ pub fn run(cmd: ScenesCommand) -> anyhow::Result<ExitCode> {
                 // `plamo scenes validate scenes/*.toml` also matches the crate's
                 // manifest, which lives beside the built-in scene files.
                 if std::path::Path::new(f).file_name() == Some("Cargo.toml".as_ref()) {
-                    println!("skip   {f}: a Cargo manifest, not a scene");
+                    say!("skip   {f}: a Cargo manifest, not a scene");
                     continue;
                 }
                 match plamo_scenes::resolve(f).and_then(|s| plamo_scenes::validate(&s).map(|()| s))
                 {
-                    Ok(s) => println!("ok     {f}: {}", one_line(&s)),
+                    Ok(s) => say!("ok     {f}: {}", one_line(&s)),
                     Err(e) => {
                         failed += 1;
-                        println!("error  {e}");
+                        say!("error  {e}");
                     }
                 }
             }
@@ -86,14 +86,14 @@ pub fn run(cmd: ScenesCommand) -> anyhow::Result<ExitCode> {
         ScenesCommand::Render { scene, out } => {
             let s = plamo_scenes::resolve(&scene)?;
             render_map(&s, &MapOverlay::default(), &out)?;
-            println!("wrote {}", out.display());
+            say!("wrote {}", out.display());
             Ok(ExitCode::SUCCESS)
         }
         ScenesCommand::Random { seed, out } => {
             let (file, scene) = plamo_scenes::random_scene_with_file(seed);
             std::fs::write(&out, file.to_toml())
                 .with_context(|| format!("cannot write {}", out.display()))?;
-            println!("wrote {}: {}", out.display(), one_line(&scene));
+            say!("wrote {}: {}", out.display(), one_line(&scene));
             Ok(ExitCode::SUCCESS)
         }
     }

@@ -156,7 +156,7 @@ pub fn run(args: TuneArgs) -> anyhow::Result<ExitCode> {
     );
     let text = best.to_toml(form, &header)?;
     std::fs::write(&out, text).with_context(|| format!("writing {}", out.display()))?;
-    println!("{}", serde_json::to_string_pretty(&cost)?);
-    println!("wrote {}", out.display());
+    say!("{}", serde_json::to_string_pretty(&cost)?);
+    say!("wrote {}", out.display());
     Ok(ExitCode::SUCCESS)
 }

@@ -28,7 +28,7 @@ pub fn run(args: ViewArgs) -> anyhow::Result<ExitCode> {
         .unwrap_or_else(|| args.dirs[0].join("view.html"));
     let dirs: Vec<&std::path::Path> = args.dirs.iter().map(PathBuf::as_path).collect();
     plamo::export::write_viewer(&dirs, &out)?;
-    println!("wrote {}", out.display());
+    say!("wrote {}", out.display());
     // Only an explicit page request or a missing display keeps the browser closed.
     let display =
         std::env::var_os("DISPLAY").is_some() || std::env::var_os("WAYLAND_DISPLAY").is_some();
