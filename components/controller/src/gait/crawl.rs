@@ -379,6 +379,13 @@ pub struct CrawlParams {
     /// outside the ankles' width \[1/s\]. 0: off.
     #[serde(default)]
     pub down_com_gain: f64,
+    /// Share of the plan's speed a turning crawl gives up per rad of heading error
+    /// \[1/rad\]: it crawls at `1 - turn_slowdown * |error|` of the speed (none below
+    /// 0). A turning crawl's limbs sweep sideways with the yaw on top of the forward
+    /// sweep, and it rolled over about 1.7 times as often as a straight one (RESULTS
+    /// "Crawl", session 21). 0: off.
+    #[serde(default)]
+    pub turn_slowdown: f64,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -491,7 +498,8 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 73] = [
+        let ranges: [(&'static str, f64, f64, f64); 74] = [
+            ("turn_slowdown", self.turn_slowdown, 0.0, 10.0),
             ("up_com_gain", self.up_com_gain, 0.0, 100.0),
             ("down_com_gain", self.down_com_gain, 0.0, 100.0),
             ("up_com_ahead", self.up_com_ahead, 0.0, 0.5),
@@ -1217,6 +1225,10 @@ impl CrawlGait {
         if p.realign_above > 0.0 && heading_err.abs() > p.realign_above && self.settled() {
             self.aligning = true;
         }
+        if p.turn_slowdown > 0.0 {
+            let keep = (1.0 - p.turn_slowdown * heading_err.abs()).max(0.0);
+            v_plan = v_plan.map(|v| v * keep);
+        }
         if self.aligning {
             v_plan[0] = v_plan[0].max(-p.max_side_speed);
             v_plan[1] = v_plan[1].clamp(-p.max_side_speed, p.max_side_speed);
@@ -1641,6 +1653,36 @@ mod tests {
             ..p
         });
         assert!(off > 0.5, "without realign_above: {off} m/s");
+    }
+
+    #[test]
+    fn a_turning_crawl_slows_with_its_heading_error_under_turn_slowdown() {
+        // The plan heads off 0.6 rad to the left at 0.6 m/s, under `realign_above`;
+        // the speed commanded after 2 s.
+        let speed = |turn_slowdown: f64| {
+            let mut obs = crawling_obs();
+            let angle = 0.6_f64;
+            for i in 0..NUM_WAYPOINTS {
+                let d = (i + 1) as f64 * WAYPOINT_SPACING * 0.6;
+                obs.waypoints[i] = [d * angle.cos(), d * angle.sin(), 0.0];
+                obs.waypoint_speeds[i] = 0.6;
+            }
+            let mut gait = crawling_gait(CrawlParams {
+                turn_slowdown,
+                realign_above: 1.0,
+                pursuit: 0.0,
+                ..CrawlParams::default()
+            });
+            let mut out = Action::default();
+            for _ in 0..(2.0 / CONTROL_DT) as usize {
+                gait.act(&obs, &mut out);
+            }
+            gait.v_cmd[0].hypot(gait.v_cmd[1])
+        };
+        let off = speed(0.0);
+        assert!((off - 0.6).abs() < 0.01, "without turn_slowdown: {off} m/s");
+        let on = speed(1.0);
+        assert!((on - 0.4 * 0.6).abs() < 0.01, "turn_slowdown 1: {on} m/s");
     }
 
     #[test]
