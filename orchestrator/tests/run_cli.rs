@@ -226,13 +226,10 @@ fn a_sigkilled_component_stops_the_run_and_leaves_no_files() {
     assert_eq!(leftovers(run), Vec::<PathBuf>::new());
 }
 
-#[test]
-fn a_reader_that_goes_away_still_gets_the_output_folder_written() {
-    // `plamo run ... | head -1`, with the reader gone before the summary: the run
-    // must still write its folder and stop its components, without a panic.
-    let run = "cli-test-closed-stdout";
-    let out = out_dir("closed-stdout");
-    let mut orch = plamo(&[
+/// A 2 s multi-process run of the route (run id `run`) writing into `out`, with
+/// `extra` arguments.
+fn short_multi_process_run(run: &str, out: &Path, extra: &[&str]) -> Command {
+    let mut c = plamo(&[
         "--instructions",
         ROUTE,
         "--max-seconds",
@@ -242,11 +239,22 @@ fn a_reader_that_goes_away_still_gets_the_output_folder_written() {
         run,
         "--out",
         out.to_str().unwrap(),
-    ])
-    .stdout(Stdio::piped())
-    .stderr(Stdio::piped())
-    .spawn()
-    .unwrap();
+    ]);
+    c.args(extra);
+    c
+}
+
+#[test]
+fn a_reader_that_goes_away_still_gets_the_output_folder_written() {
+    // `plamo run ... | head -1`, with the reader gone before the summary: the run
+    // must still write its folder and stop its components, without a panic.
+    let run = "cli-test-closed-stdout";
+    let out = out_dir("closed-stdout");
+    let mut orch = short_multi_process_run(run, &out, &[])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
     drop(orch.stdout.take());
     let status =
         wait_with_deadline(&mut orch, Duration::from_secs(120)).expect("orchestrator hangs");
@@ -341,22 +349,10 @@ fn components_exit_when_the_orchestrator_is_killed() {
 #[test]
 fn concurrent_runs_are_isolated() {
     let spawn = |run: &str, seed: &str, out: &Path| {
-        plamo(&[
-            "--instructions",
-            ROUTE,
-            "--max-seconds",
-            "2",
-            "--seed",
-            seed,
-            "--processes",
-            "--run",
-            run,
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap()
+        short_multi_process_run(run, out, &["--seed", seed])
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap()
     };
     let (da, db) = (out_dir("conc-a"), out_dir("conc-b"));
     let a = spawn("cli-test-conc-a", "1", &da);
