@@ -119,19 +119,37 @@ impl Scene {
         heading: f64,
         reference_z: f64,
     ) -> LocalHeightMap {
+        let mut out = [0.0; LOCAL_MAP_SAMPLES];
+        let first = -(LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
+        self.local_heights_into(x, y, heading, reference_z, first, &mut out);
+        out
+    }
+
+    /// Rows of [`LOCAL_MAP_SIDE`] terrain samples laid out as the local height map's
+    /// (same columns and spacing, rotated to `heading`, relative to `reference_z`),
+    /// the first row `first_row` spacings ahead of (x, y): `out[r * 8 + c]` lies
+    /// `(first_row + r) * 0.1` m forward. As many rows as `out` holds (whole rows);
+    /// the controller's map is the 8 rows from -3.5 (-0.35 m).
+    pub fn local_heights_into(
+        &self,
+        x: f64,
+        y: f64,
+        heading: f64,
+        reference_z: f64,
+        first_row: f64,
+        out: &mut [f64],
+    ) {
         let (s, c) = heading.sin_cos();
         let half = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
-        let mut out = [0.0; LOCAL_MAP_SAMPLES];
-        for r in 0..LOCAL_MAP_SIDE {
-            for col in 0..LOCAL_MAP_SIDE {
-                let fwd = (r as f64 - half) * LOCAL_MAP_SPACING;
+        for (r, row) in out.chunks_exact_mut(LOCAL_MAP_SIDE).enumerate() {
+            let fwd = (first_row + r as f64) * LOCAL_MAP_SPACING;
+            for (col, v) in row.iter_mut().enumerate() {
                 let left = (col as f64 - half) * LOCAL_MAP_SPACING;
                 let wx = x + c * fwd - s * left;
                 let wy = y + s * fwd + c * left;
-                out[r * LOCAL_MAP_SIDE + col] = self.height_at(wx, wy) - reference_z;
+                *v = self.height_at(wx, wy) - reference_z;
             }
         }
-        out
     }
 }
 
@@ -247,5 +265,32 @@ mod tests {
         // r = 0, c = 7: fwd = -0.35 (y - 0.35), left = +0.35 -> x - 0.35.
         let expect = 0.2 * 4.65 - 0.1 * 4.65 - 0.3;
         assert!((m[7] - expect).abs() < 1e-9);
+    }
+
+    #[test]
+    fn rows_ahead_continue_the_map_on_the_same_columns() {
+        let s = scene_with(plane());
+        let (x, y, z0, heading) = (5.0, 5.0, 0.3, 0.7);
+        let map = s.local_height_map(x, y, heading, z0);
+        // Rows 4.5 .. 8.5 spacings ahead: the first overlaps nothing, and 8 rows from
+        // -3.5 are the map itself, value for value.
+        let mut same = [0.0; LOCAL_MAP_SAMPLES];
+        s.local_heights_into(x, y, heading, z0, -3.5, &mut same);
+        assert_eq!(same, map);
+        let mut ahead = [0.0; 5 * LOCAL_MAP_SIDE];
+        s.local_heights_into(x, y, heading, z0, 4.5, &mut ahead);
+        let (sn, cs) = heading.sin_cos();
+        for r in 0..5 {
+            for c in 0..8 {
+                let fwd = (4.5 + r as f64) * 0.1;
+                let left = (c as f64 - 3.5) * 0.1;
+                let (wx, wy) = (x + cs * fwd - sn * left, y + sn * fwd + cs * left);
+                let h = 0.2 * wx - 0.1 * wy - z0;
+                assert!((ahead[r * 8 + c] - h).abs() < 1e-9, "r{r} c{c}");
+            }
+        }
+        // The first row ahead is one spacing beyond the map's front row.
+        let step = ahead[3] - map[7 * 8 + 3];
+        assert!((step - 0.1 * (0.2 * cs - 0.1 * sn)).abs() < 1e-9, "{step}");
     }
 }

@@ -24,7 +24,7 @@
 //! [`ObservationLayout::offsets`]; a learned policy's sidecar records the version and
 //! sizes and is rejected when they differ.
 
-use plamo_scenes::{LOCAL_MAP_SAMPLES, LocalHeightMap, Scene};
+use plamo_scenes::{LOCAL_MAP_SAMPLES, LOCAL_MAP_SIDE, LocalHeightMap, Scene};
 
 use crate::error::{ControllerError, Result, check_finite};
 use crate::math::{heading_of, quat_to_mat, to_heading_frame};
@@ -36,6 +36,13 @@ pub const OBSERVATION_VERSION: u32 = 1;
 pub const NUM_WAYPOINTS: usize = 10;
 /// Time between observed waypoints \[s\] (paper 4.2: one every 0.5 s).
 pub const WAYPOINT_SPACING: f64 = 0.5;
+/// Rows of [`Observation::reach_map`], the terrain ahead of the height map.
+pub const REACH_ROWS: usize = 5;
+/// Forward offset of [`Observation::reach_map`]'s first row, in map spacings (the
+/// height map's front row is at 3.5).
+pub const REACH_FIRST_ROW: f64 = 4.5;
+/// Samples in [`Observation::reach_map`].
+pub const REACH_SAMPLES: usize = REACH_ROWS * LOCAL_MAP_SIDE;
 
 /// The humanoid state the controller reads, world frame (Z up, metres, radians).
 ///
@@ -180,6 +187,14 @@ pub struct Observation {
     pub waypoint_ground: [f64; NUM_WAYPOINTS],
     /// Local terrain heights relative to the ground under the root \[m\].
     pub height_map: LocalHeightMap,
+    /// The terrain ahead of `height_map`, relative to the ground under the root \[m\]
+    /// (not flattened: the paper's map spans 0.8 m, and a crawling body's hands and
+    /// head land 0.45-0.6 m ahead of its root, beyond it): [`REACH_ROWS`] more rows
+    /// on the map's columns, row `r` at `(REACH_FIRST_ROW + r) * 0.1` m forward
+    /// (0.45-0.85 m). [`Observation::update`] samples the scene;
+    /// [`Observation::update_with_map`] has no scene and repeats the map's front row
+    /// (the ground goes on as at the map's edge).
+    pub reach_map: [f64; REACH_SAMPLES],
     /// Head position relative to the root, heading frame \[m\] (not flattened: it is
     /// one of `body_pos`; kept so policies need not know the head's body index).
     pub head_pos: [f64; 3],
@@ -204,6 +219,7 @@ impl Observation {
             waypoint_speeds: [0.0; NUM_WAYPOINTS],
             waypoint_ground: [0.0; NUM_WAYPOINTS],
             height_map: [0.0; LOCAL_MAP_SAMPLES],
+            reach_map: [0.0; REACH_SAMPLES],
             head_pos: [0.0; 3],
             heading: 0.0,
         }
@@ -230,6 +246,7 @@ impl Observation {
         for (g, w) in self.waypoint_ground.iter_mut().zip(waypoints) {
             *g = scene.height_at(w.x, w.y) - ground;
         }
+        scene.local_heights_into(x, y, heading, ground, REACH_FIRST_ROW, &mut self.reach_map);
         Ok(())
     }
 
@@ -275,6 +292,10 @@ impl Observation {
         }
         self.waypoint_ground = [0.0; NUM_WAYPOINTS];
         self.height_map = *height_map;
+        let front = &height_map[(LOCAL_MAP_SIDE - 1) * LOCAL_MAP_SIDE..];
+        for row in self.reach_map.chunks_exact_mut(LOCAL_MAP_SIDE) {
+            row.copy_from_slice(front);
+        }
         Ok(())
     }
 
@@ -405,6 +426,36 @@ mod tests {
         assert!((fa[o.root_height] - 0.9).abs() < 1e-6);
         // Head body is 0.57 m above the root.
         assert!((fa[o.body_pos + 5] - 0.57).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_ground_ahead_of_the_map_and_under_the_waypoints_comes_from_the_scene() {
+        // Root 0.6 m before a 0.2 m ledge: the height map (to 0.35 m ahead) is all
+        // floor, the rows ahead of it reach the ledge, as do the waypoints from 1 m.
+        let scene = crate::rollout::ledge_scene(8.0, 0.2);
+        let at = [crate::rollout::LEDGE_AT - 0.6, 0.0];
+        let s = snapshot(0.0, at);
+        let mut obs = Observation::new(LAYOUT);
+        obs.update(&s, &plan(0.0, at), &scene).unwrap();
+        assert_eq!(obs.waypoint_ground[..2], [0.0, 0.2]);
+        assert!(obs.height_map.iter().all(|&h| h == 0.0));
+        let row = |o: &Observation, r: usize| {
+            o.reach_map[r * LOCAL_MAP_SIDE..][..LOCAL_MAP_SIDE].to_vec()
+        };
+        // 0.45 m is short of the ledge (0.6 m), 0.65 m on it.
+        assert!(row(&obs, 0).iter().all(|&h| h == 0.0), "{:?}", row(&obs, 0));
+        assert!(row(&obs, 2).iter().all(|&h| h == 0.2), "{:?}", row(&obs, 2));
+        // Turned back, the rows ahead lie over the floor.
+        obs.update(&snapshot(std::f64::consts::PI, at), &plan(0.0, at), &scene)
+            .unwrap();
+        assert!(obs.reach_map.iter().all(|&h| h == 0.0));
+        // Without a scene the ground ahead goes on as the map's front row.
+        let mut map = [0.0; LOCAL_MAP_SAMPLES];
+        map[LOCAL_MAP_SAMPLES - 1] = 0.3;
+        obs.update_with_map(&s, &plan(0.0, at), 0.0, &map).unwrap();
+        for r in 0..REACH_ROWS {
+            assert_eq!(row(&obs, r), &map[LOCAL_MAP_SAMPLES - LOCAL_MAP_SIDE..]);
+        }
     }
 
     #[test]

@@ -65,7 +65,7 @@ use super::plan_trace::PlanTrace;
 use super::{com_over_feet, mass_fractions, residual_force, residual_wrench};
 use crate::error::{ControllerError, Result};
 use crate::math::{smoothstep, sub3, wrap_angle};
-use crate::observation::{Observation, WAYPOINT_SPACING};
+use crate::observation::{Observation, REACH_FIRST_ROW, REACH_ROWS, WAYPOINT_SPACING};
 use crate::policy::{Action, RootWrench};
 use crate::settings::{ControllerSettings, GRAVITY};
 
@@ -281,6 +281,18 @@ pub struct CrawlParams {
     /// 0.20-0.23 m up). 0: off.
     #[serde(default)]
     pub head_push: f64,
+    /// The contacts, the swing and the head read the terrain 0.45-0.85 m ahead of
+    /// the root from `Observation::reach_map` (the scene's own heights), and the plan's
+    /// ground only beyond it. The paper's height map reaches 0.35 m ahead; the crawl's
+    /// elbows and head land 0.45-0.6 m ahead, so a ledge or tread there was the map's
+    /// front row (or, with `ground_ahead`, the ground under the plan's waypoints,
+    /// metres away where the body lags or has turned off its path). Off: as before.
+    /// Measured, off (RESULTS.md "Crawl", session 23): MuJoCo mixed tours seeds
+    /// 0-1199 882 -> 868 of 1200, crawl first falls on flat ground 25 -> 35; the
+    /// crawl's head held over a ledge it cannot rise above was a third of its falls
+    /// on stairs, and seeing the ledge did not lift it.
+    #[serde(default)]
+    pub reach_map: bool,
     /// A swinging limb clears the plan's ground at its landing point too (beyond the
     /// map, `Observation::waypoint_ground`), not only the map's: a hand landing on a
     /// tread above the map's front row swings over the riser's nose instead of into
@@ -749,6 +761,8 @@ struct Ground<'a> {
     plan: PlanGround,
     /// The plan's ground beyond the map for the head, with or without `ground_ahead`.
     beyond: PlanGround,
+    /// The rows ahead of the map with `reach_map` (`Observation::reach_map`).
+    reach: Option<&'a [f64]>,
 }
 
 impl<'a> Ground<'a> {
@@ -760,7 +774,22 @@ impl<'a> Ground<'a> {
             map: &obs.height_map,
             plan: if ahead { beyond } else { PlanGround::NONE },
             beyond,
+            reach: None,
         }
+    }
+
+    /// With `reach`, the terrain ahead of the map's front row comes from
+    /// `Observation::reach_map` (to 0.85 m), the plan's ground only beyond it
+    /// (`reach_map`).
+    fn reaching(mut self, obs: &'a Observation, reach: bool, ahead: bool) -> Self {
+        if reach {
+            let front = REACH_FIRST_ROW + (REACH_ROWS - 1) as f64;
+            let from = front * LOCAL_MAP_SPACING;
+            self.reach = Some(&obs.reach_map);
+            self.beyond = PlanGround::from_edge(obs, true, from);
+            self.plan = if ahead { self.beyond } else { PlanGround::NONE };
+        }
+        self
     }
 
     /// Height at a heading-frame point (x forward, y left of the root) \[m\]:
@@ -777,15 +806,26 @@ impl<'a> Ground<'a> {
         self.beyond.extend(x, self.map_at(x, y))
     }
 
-    /// Bilinear in the map, clamped to its extent \[m\].
+    /// Bilinear in the map (and the rows ahead of it with `reach_map`), clamped to
+    /// its extent \[m\].
     fn map_at(&self, x: f64, y: f64) -> f64 {
         let half = (LOCAL_MAP_SIDE as f64 - 1.0) / 2.0;
         let last = (LOCAL_MAP_SIDE - 1) as f64;
-        let r = (x / LOCAL_MAP_SPACING + half).clamp(0.0, last);
+        let rows = LOCAL_MAP_SIDE + self.reach.map_or(0, |r| r.len() / LOCAL_MAP_SIDE);
+        let last_row = (rows - 1) as f64;
+        let r = (x / LOCAL_MAP_SPACING + half).clamp(0.0, last_row);
         let c = (y / LOCAL_MAP_SPACING + half).clamp(0.0, last);
-        let (r0, c0) = (r.floor().min(last - 1.0), c.floor().min(last - 1.0));
+        let (r0, c0) = (r.floor().min(last_row - 1.0), c.floor().min(last - 1.0));
         let (fr, fc) = (r - r0, c - c0);
-        let h = |i: f64, j: f64| self.map[i as usize * LOCAL_MAP_SIDE + j as usize];
+        let h = |i: f64, j: f64| {
+            let (i, j) = (i as usize, j as usize);
+            match self.reach {
+                Some(ahead) if i >= LOCAL_MAP_SIDE => {
+                    ahead[(i - LOCAL_MAP_SIDE) * LOCAL_MAP_SIDE + j]
+                }
+                _ => self.map[i * LOCAL_MAP_SIDE + j],
+            }
+        };
         (1.0 - fr) * ((1.0 - fc) * h(r0, c0) + fc * h(r0, c0 + 1.0))
             + fr * ((1.0 - fc) * h(r0 + 1.0, c0) + fc * h(r0 + 1.0, c0 + 1.0))
     }
@@ -1233,7 +1273,7 @@ impl CrawlGait {
             v_plan[0] = v_plan[0].max(-p.max_side_speed);
             v_plan[1] = v_plan[1].clamp(-p.max_side_speed, p.max_side_speed);
         }
-        let ground = Ground::new(obs, p.ground_ahead);
+        let ground = Ground::new(obs, p.ground_ahead).reaching(obs, p.reach_map, p.ground_ahead);
         if p.slope_pitch > 0.0 {
             let a = (CONTROL_DT / SLOPE_FILTER).min(1.0);
             self.slope += a * (self.ground_slope(&ground).max(0.0) - self.slope);
@@ -2129,6 +2169,54 @@ mod tests {
             "up {up} (level {level})"
         );
         assert_eq!(pitch(on, false), level);
+    }
+
+    #[test]
+    fn the_reach_map_shows_a_ledge_the_plan_does_not_cross() {
+        // Flat under the body (the map); a 0.2 m ledge from 0.45 m ahead, across the
+        // reach map only: the plan runs off to the side over level ground.
+        let mut obs = crawling_obs();
+        obs.head_pos = [0.55, 0.0, -0.15];
+        for i in 0..NUM_WAYPOINTS {
+            obs.waypoints[i] = [0.0, 0.25 * (i + 1) as f64, 0.0];
+        }
+        for (k, h) in obs.reach_map.iter_mut().enumerate() {
+            let x = (REACH_FIRST_ROW + (k / LOCAL_MAP_SIDE) as f64) * LOCAL_MAP_SPACING;
+            *h = if x >= 0.45 - 1e-9 { 0.2 } else { 0.0 };
+        }
+        let on = CrawlParams {
+            reach_map: true,
+            ..CrawlParams::default()
+        };
+        let off = CrawlParams {
+            reach_map: false,
+            ..on
+        };
+        let ground = |p: &CrawlParams| {
+            Ground::new(&obs, p.ground_ahead).reaching(&obs, p.reach_map, p.ground_ahead)
+        };
+        let (g_off, g_on) = (ground(&off), ground(&on));
+        // Inside the map both read it; ahead of it only the reach map has the ledge.
+        assert_eq!(g_on.at(0.3, 0.1), g_off.at(0.3, 0.1));
+        assert_eq!(g_off.at(0.6, 0.1), 0.0);
+        assert!((g_on.at(0.6, 0.1) - 0.2).abs() < 1e-12);
+        // Halfway between the map's front row (0.35 m) and the reach map's first.
+        assert!(
+            (g_on.at(0.4, 0.0) - 0.1).abs() < 1e-9,
+            "{}",
+            g_on.at(0.4, 0.0)
+        );
+        // Beyond the reach map's last row (0.85 m) its front row goes on.
+        assert!((g_on.at(2.0, 0.0) - 0.2).abs() < 1e-12);
+        // The head keeps its clearance over the ledge: the pelvis rises.
+        let gait = |p: CrawlParams| CrawlGait::new(p, ControllerSettings::default());
+        let (f_off, f_on) = (gait(off).frame(&g_off), gait(on).frame(&g_on));
+        assert!(
+            f_on.pelvis_height > f_off.pelvis_height + 0.05,
+            "{} vs {}",
+            f_on.pelvis_height,
+            f_off.pelvis_height
+        );
     }
 
     #[test]

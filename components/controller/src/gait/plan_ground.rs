@@ -12,6 +12,8 @@ pub(crate) struct PlanGround {
     /// heading frame, heights relative to the ground under the root \[m\].
     ahead: [(f64, f64); NUM_WAYPOINTS],
     n: usize,
+    /// Where the map the plan's ground extends ends, forward \[m\].
+    from: f64,
 }
 
 impl PlanGround {
@@ -19,6 +21,7 @@ impl PlanGround {
     pub(crate) const NONE: Self = Self {
         ahead: [(0.0, 0.0); NUM_WAYPOINTS],
         n: 0,
+        from: MAP_HALF,
     };
 
     /// The waypoints of `obs` ahead of the map's front row, each at least 5 cm
@@ -26,8 +29,14 @@ impl PlanGround {
     /// nothing); with `straight_ahead` only those within 45 degrees of the heading (a
     /// plan off to the side has its ground elsewhere than under the body).
     pub(crate) fn new(obs: &Observation, straight_ahead: bool) -> Self {
-        let mut g = Self::NONE;
-        let mut last = MAP_HALF;
+        Self::from_edge(obs, straight_ahead, MAP_HALF)
+    }
+
+    /// As [`PlanGround::new`] for a map that reaches `from` \[m\] ahead of the root
+    /// (the height map with the rows ahead of it, `Observation::reach_map`).
+    pub(crate) fn from_edge(obs: &Observation, straight_ahead: bool, from: f64) -> Self {
+        let mut g = Self { from, ..Self::NONE };
+        let mut last = from;
         for (w, &h) in obs.waypoints.iter().zip(&obs.waypoint_ground) {
             // Waypoints are relative to the head; the map to the root.
             let x = w[0] + obs.head_pos[0];
@@ -45,10 +54,10 @@ impl PlanGround {
     /// (clamped to the map): `edge` up to the front row, beyond it interpolated
     /// linearly to the waypoints' ground, beyond the last waypoint the last one's.
     pub(crate) fn extend(&self, x: f64, edge: f64) -> f64 {
-        if x <= MAP_HALF {
+        if x <= self.from {
             return edge;
         }
-        let mut prev = (MAP_HALF, edge);
+        let mut prev = (self.from, edge);
         for &(xw, gw) in &self.ahead[..self.n] {
             if x <= xw {
                 return prev.1 + (gw - prev.1) * (x - prev.0) / (xw - prev.0);
