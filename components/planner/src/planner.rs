@@ -921,6 +921,9 @@ pub(crate) fn junction_speed(s: &PlannerSettings, a: &[PathPoint], b: &[PathPoin
     if n_in > 1e-6 && n_out > 1e-6 {
         let cos = ((d_in[0] * d_out[0] + d_in[1] * d_out[1]) / (n_in * n_out)).clamp(-1.0, 1.0);
         let angle = cos.acos();
+        if angle > s.turn_back_angle {
+            return 0.0;
+        }
         if angle > 1e-3 {
             let curvature = angle / s.corner_length;
             v = v.min((s.a_lat / curvature).sqrt());

@@ -79,6 +79,21 @@ pub struct PlannerSettings {
     /// angle) (a crawl: `crawl_turn_rate` * length / angle), and at
     /// `form_change_speed` where the form changes there. Default 0.5.
     pub corner_length: f64,
+    /// Corner angle at a landmark above which the legs meet at rest (not in the
+    /// paper) \[rad\]: a leg that sets off back the way the last one came reverses
+    /// the body's velocity at the junction, which `corner_length`'s bend only slows
+    /// (a U-turn at sqrt(a_lat * length / pi), 0.4 m/s). The plan's point jumped
+    /// behind a body still moving forward, which walked backwards and sideways after
+    /// it while it turned, rolled and fell: 14 of the 22 MuJoCo tours (seeds 0-1199)
+    /// first lost to a crouch-walk fall on flat ground fell in the first 3 s of a
+    /// leg, 9 of them where a crouch-walk leg followed one. Above this angle the
+    /// junction speed is 0: the plan stops at the landmark and the next leg starts
+    /// from rest. Measured with 2.0 (RESULTS.md, session 23): MuJoCo mixed tours
+    /// seeds 0-1199 882 -> 901 of 1200 (crouch-walk flat first falls 22 -> 12; 1.6:
+    /// 901 too), rapier seeds 0-159 96 -> 95; planned tour time +8.7% (the paper's
+    /// a_min slows the approach). pi: never (the bend rule alone). Default 2.0
+    /// (115 degrees).
+    pub turn_back_angle: f64,
     /// How deep inside a landmark's region a leg's path ends, where the region is
     /// that deep (not in the paper) \[m\]: a path that ends on the region's edge
     /// leaves a body that tracks it a few decimetres off standing just outside, never
@@ -260,6 +275,7 @@ impl Default for PlannerSettings {
             form_change_speed: 0.3,
             form_change_length: 0.5,
             corner_length: 0.5,
+            turn_back_angle: 2.0,
             goal_depth: 0.4,
             crawl_turn_rate: 0.5,
             crawl_relief_cost: 20.0,
@@ -321,6 +337,7 @@ impl PlannerSettings {
             ("form_change_speed", self.form_change_speed),
             ("form_change_length", self.form_change_length),
             ("corner_length", self.corner_length),
+            ("turn_back_angle", self.turn_back_angle),
             ("crawl_turn_rate", self.crawl_turn_rate),
             ("walk_speed", self.walk_speed),
             ("run_speed", self.run_speed),

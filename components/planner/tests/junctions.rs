@@ -7,11 +7,15 @@ use plamo_planner::{Planner, PlannerSettings, Trajectory};
 use plamo_scenes::builtin;
 
 fn route(text: &str) -> Vec<Trajectory> {
+    route_with(text, PlannerSettings::default())
+}
+
+fn route_with(text: &str, settings: PlannerSettings) -> Vec<Trajectory> {
     let scene = builtin("playground").unwrap();
     let first = text.split(" from the ").nth(1).unwrap();
     let name = first.split(' ').next().unwrap();
     let start = scene.landmark(name).unwrap().region.center();
-    Planner::new(scene, text, start, PlannerSettings::default())
+    Planner::new(scene, text, start, settings)
         .unwrap()
         .route()
         .to_vec()
@@ -56,4 +60,24 @@ fn a_form_change_at_a_landmark_is_taken_slowly() {
     // leg planned alone.
     let alone = route("Walk from the tree to the swing");
     assert!(r[0].end_time() > alone[0].end_time() + 0.5);
+}
+
+#[test]
+fn a_turn_back_beyond_turn_back_angle_meets_at_rest() {
+    let back = "Walk from the fountain to the sandbox, then walk to the fountain";
+    let on = "Walk from the sandbox to the fountain, then walk to the tree";
+    let bend_only = PlannerSettings {
+        turn_back_angle: std::f64::consts::PI,
+        ..PlannerSettings::default()
+    };
+    // Back the way it came (about pi, above the default 2 rad): the walk stops at the
+    // sandbox and sets off from rest, later than the bend rule alone lets it.
+    let (stopped, slow) = (route(back), route_with(back, bend_only.clone()));
+    assert_eq!(junction(&stopped), (0.0, 0.0));
+    assert!(junction(&slow).0 > 0.1, "{:?}", junction(&slow));
+    assert!(stopped[1].end_time() > slow[1].end_time());
+    // Straight on: the setting changes nothing.
+    let (a, b) = (route(on), route_with(on, bend_only));
+    assert_eq!(junction(&a), junction(&b));
+    assert_eq!(a[1].end_time(), b[1].end_time());
 }
