@@ -89,10 +89,10 @@ pub struct PlannerSettings {
     /// leg, 9 of them where a crouch-walk leg followed one. Above this angle the
     /// junction speed is 0: the plan stops at the landmark and the next leg starts
     /// from rest. Measured with 2.0 (RESULTS.md, session 23): MuJoCo mixed tours
-    /// seeds 0-1199 882 -> 901 of 1200 (crouch-walk flat first falls 22 -> 12; 1.6:
-    /// 901 too), rapier seeds 0-159 96 -> 95; planned tour time +8.7% (the paper's
-    /// a_min slows the approach). pi: never (the bend rule alone). Default 2.0
-    /// (115 degrees).
+    /// seeds 0-2399 1721 -> 1783 of 2400 (246 gained, 184 lost; crouch-walk flat
+    /// first falls 48 -> 28; 1.6 on seeds 0-1199: as 2.0), rapier seeds 0-159
+    /// 96 -> 95; planned tour time +8.3% (the paper's a_min slows the approach). pi:
+    /// never (the bend rule alone). Default 2.0 (115 degrees).
     pub turn_back_angle: f64,
     /// How deep inside a landmark's region a leg's path ends, where the region is
     /// that deep (not in the paper) \[m\]: a path that ends on the region's edge
