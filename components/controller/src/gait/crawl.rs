@@ -58,7 +58,7 @@ use plamo_physics::humanoid::{BODIES, HEAD_OFFSET, JOINTS, body_index, joint_ind
 use plamo_physics::{NUM_BODIES, NUM_JOINTS};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
-use super::map_plane::MapPlane;
+use super::map_plane::{MAP_HALF, MapPlane};
 use super::params::{parse_toml, read_params};
 use super::plan_ground::PlanGround;
 use super::plan_trace::PlanTrace;
@@ -766,30 +766,24 @@ struct Ground<'a> {
 }
 
 impl<'a> Ground<'a> {
-    /// The height map of `obs`, and with `ahead` the plan's waypoints straight ahead
-    /// of its front row.
-    fn new(obs: &'a Observation, ahead: bool) -> Self {
-        let beyond = PlanGround::new(obs, true);
+    /// The height map of `obs`, with `ahead` the plan's waypoints straight ahead of
+    /// its front row, and with `reach` the terrain ahead of the map's front row from
+    /// `Observation::reach_map` (to 0.85 m), the plan's ground only beyond it
+    /// (`reach_map`).
+    fn new(obs: &'a Observation, ahead: bool, reach: bool) -> Self {
+        let (reach, edge) = if reach {
+            let front = REACH_FIRST_ROW + (REACH_ROWS - 1) as f64;
+            (Some(&obs.reach_map[..]), front * LOCAL_MAP_SPACING)
+        } else {
+            (None, MAP_HALF)
+        };
+        let beyond = PlanGround::from_edge(obs, true, edge);
         Ground {
             map: &obs.height_map,
             plan: if ahead { beyond } else { PlanGround::NONE },
             beyond,
-            reach: None,
+            reach,
         }
-    }
-
-    /// With `reach`, the terrain ahead of the map's front row comes from
-    /// `Observation::reach_map` (to 0.85 m), the plan's ground only beyond it
-    /// (`reach_map`).
-    fn reaching(mut self, obs: &'a Observation, reach: bool, ahead: bool) -> Self {
-        if reach {
-            let front = REACH_FIRST_ROW + (REACH_ROWS - 1) as f64;
-            let from = front * LOCAL_MAP_SPACING;
-            self.reach = Some(&obs.reach_map);
-            self.beyond = PlanGround::from_edge(obs, true, from);
-            self.plan = if ahead { self.beyond } else { PlanGround::NONE };
-        }
-        self
     }
 
     /// Height at a heading-frame point (x forward, y left of the root) \[m\]:
@@ -1273,7 +1267,7 @@ impl CrawlGait {
             v_plan[0] = v_plan[0].max(-p.max_side_speed);
             v_plan[1] = v_plan[1].clamp(-p.max_side_speed, p.max_side_speed);
         }
-        let ground = Ground::new(obs, p.ground_ahead).reaching(obs, p.reach_map, p.ground_ahead);
+        let ground = Ground::new(obs, p.ground_ahead, p.reach_map);
         if p.slope_pitch > 0.0 {
             let a = (CONTROL_DT / SLOPE_FILTER).min(1.0);
             self.slope += a * (self.ground_slope(&ground).max(0.0) - self.slope);
@@ -2104,7 +2098,10 @@ mod tests {
             ..off
         };
         let gait = |p: CrawlParams| CrawlGait::new(p, ControllerSettings::default());
-        let (g_off, g_on) = (Ground::new(&obs, false), Ground::new(&obs, true));
+        let (g_off, g_on) = (
+            Ground::new(&obs, false, false),
+            Ground::new(&obs, true, false),
+        );
         // Inside the map both read the map; beyond it only the switch sees the tread.
         assert_eq!(g_on.at(0.2, 0.1), 0.0);
         assert_eq!(g_off.at(0.52, 0.1), 0.0);
@@ -2122,7 +2119,7 @@ mod tests {
         for w in &mut obs.waypoints {
             w[1] = 3.0 * (w[0] + 0.6);
         }
-        assert_eq!(Ground::new(&obs, true).at(0.52, 0.1), 0.0);
+        assert_eq!(Ground::new(&obs, true, false).at(0.52, 0.1), 0.0);
     }
 
     #[test]
@@ -2146,7 +2143,7 @@ mod tests {
             for _ in 0..(1.5 / CONTROL_DT) as usize {
                 gait.act(&obs, &mut out);
             }
-            gait.frame(&Ground::new(&obs, params.ground_ahead))
+            gait.frame(&Ground::new(&obs, params.ground_ahead, false))
                 .pelvis_pitch
         };
         let off = CrawlParams {
@@ -2192,9 +2189,7 @@ mod tests {
             reach_map: false,
             ..on
         };
-        let ground = |p: &CrawlParams| {
-            Ground::new(&obs, p.ground_ahead).reaching(&obs, p.reach_map, p.ground_ahead)
-        };
+        let ground = |p: &CrawlParams| Ground::new(&obs, p.ground_ahead, p.reach_map);
         let (g_off, g_on) = (ground(&off), ground(&on));
         // Inside the map both read it; ahead of it only the reach map has the ledge.
         assert_eq!(g_on.at(0.3, 0.1), g_off.at(0.3, 0.1));
@@ -2231,7 +2226,7 @@ mod tests {
             }
             obs.waypoint_ground = [tread; NUM_WAYPOINTS];
             let gait = CrawlGait::new(params, ControllerSettings::default());
-            gait.frame(&Ground::new(&obs, params.ground_ahead))
+            gait.frame(&Ground::new(&obs, params.ground_ahead, false))
                 .pelvis_height
         };
         let off = CrawlParams {
