@@ -398,6 +398,25 @@ pub struct CrawlParams {
     /// "Crawl", session 21). 0: off.
     #[serde(default)]
     pub turn_slowdown: f64,
+    /// How far the get-up straightens the low side's leg and bends the high side's,
+    /// per rad of body roll (heading frame) \[rad/rad\]: knee by this, hip and ankle
+    /// pitch by half of it the other way, so the foot stays flat. Getting up from a
+    /// crawl on a cross slope, the squat let the body roll towards the low side, 0.2-0.3
+    /// rad at the start to 0.5-0.9 by the time the legs were straight, and the walk it
+    /// handed over to fell sideways (RESULTS "Crawl", session 24). 0: off.
+    #[serde(default)]
+    pub up_level: f64,
+    /// `up_level` for the get-down, into the squat (faded out as the knees go down
+    /// to the ground) \[rad/rad\]: squatting on a cross slope, the body rolled
+    /// towards the low side as it does getting up, 0.3-0.8 rad before the knees were
+    /// down (RESULTS "Crawl", session 24). 0: off.
+    #[serde(default)]
+    pub down_level: f64,
+    /// Sideways speed the get-up's residual asks for per m the centre of mass is
+    /// outside the ankles' width \[1/s\] (as `down_com_gain` does getting down).
+    /// 0: off.
+    #[serde(default)]
+    pub up_side_gain: f64,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -510,8 +529,11 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 74] = [
+        let ranges: [(&'static str, f64, f64, f64); 77] = [
             ("turn_slowdown", self.turn_slowdown, 0.0, 10.0),
+            ("up_level", self.up_level, 0.0, 5.0),
+            ("down_level", self.down_level, 0.0, 5.0),
+            ("up_side_gain", self.up_side_gain, 0.0, 100.0),
             ("up_com_gain", self.up_com_gain, 0.0, 100.0),
             ("down_com_gain", self.down_com_gain, 0.0, 100.0),
             ("up_com_ahead", self.up_com_ahead, 0.0, 0.5),
@@ -907,6 +929,9 @@ const ALIGNED: f64 = 0.3;
 /// up \[rad\].
 const TRANSITION_YAW_ERR: f64 = 0.2;
 
+/// Largest knee change of `up_level` and `down_level` per leg \[rad\].
+const MAX_LEVEL: f64 = 0.6;
+
 /// Standing pose the get-up blends into \[rad\] (hip, knee, ankle pitch).
 const STAND: [f64; 3] = [-0.1, 0.2, -0.1];
 
@@ -1195,6 +1220,23 @@ impl CrawlGait {
         }
     }
 
+    /// Straightens the low side's leg and bends the high side's by `gain` times the
+    /// body's `roll` (> 0: right side low) in the knee, half of it the other way in
+    /// hip and ankle pitch (`up_level`, `down_level`).
+    fn level_legs(&self, gain: f64, roll: f64, targets: &mut [f64]) {
+        if gain == 0.0 {
+            return;
+        }
+        let j = &self.joints;
+        for (leg, side) in [(0, -1.0), (1, 1.0)] {
+            let knee = targets[j.knee[leg]];
+            let e = (-side * gain * roll).clamp(-MAX_LEVEL, MAX_LEVEL).min(knee);
+            targets[j.knee[leg]] = knee - e;
+            targets[j.hip[leg][1]] += 0.5 * e;
+            targets[j.ankle[leg][0]] += 0.5 * e;
+        }
+    }
+
     /// Contact heights on the ground (pressed in), for (x, y) points.
     fn grounded(&self, ground: &Ground, xy: &[[f64; 2]; LIMBS]) -> [[f64; 3]; LIMBS] {
         let p = &self.params;
@@ -1291,6 +1333,14 @@ impl CrawlGait {
                 let contacts = self.grounded(&ground, &reach);
                 self.pose_targets(&f, &contacts, [0.0; 2], [false; 2], [None; 2], &mut crawl);
                 self.through_squat(false, &self.from, &crawl, t / p.down_time, targets);
+                // Into the squat only: kneeling, the crawl's own roll feedback takes over.
+                let u = t / p.down_time;
+                let fade = if u < p.squat_share {
+                    1.0
+                } else {
+                    1.0 - smoothstep((u - p.squat_share) / (1.0 - p.squat_share))
+                };
+                self.level_legs(fade * p.down_level, roll, targets);
                 let t = t + CONTROL_DT;
                 self.mode = if t >= p.down_time {
                     // The crawl starts from rest (its desired velocity ramps up): the
@@ -1332,6 +1382,7 @@ impl CrawlGait {
                     stand[j.ankle[leg][0]] = STAND[2];
                 }
                 self.through_squat(true, &self.from, &stand, t / p.up_time, targets);
+                self.level_legs(p.up_level, roll, targets);
                 let u = t / p.up_time;
                 self.mode = Mode::Up {
                     t: t + CONTROL_DT,
@@ -1350,13 +1401,14 @@ impl CrawlGait {
                 // The hands push the body back over the feet while sitting back. The
                 // legs must straighten under the centre of mass: ahead of the ankles,
                 // the straightening legs tipped the whole body onto its face.
-                let ahead = com_over_feet(&self.mass_fraction, obs).0[0];
+                let (com, band) = com_over_feet(&self.mass_fraction, obs);
                 let back = if u < p.squat_share {
                     -p.sit_back_speed
                 } else {
                     0.0
-                } - p.up_com_gain * (ahead - p.up_com_ahead).max(0.0);
-                ([back, 0.0], pitch0 * (1.0 - s), height, 0.0)
+                } - p.up_com_gain * (com[0] - p.up_com_ahead).max(0.0);
+                let side = -p.up_side_gain * (com[1] - com[1].clamp(band[0], band[1]));
+                ([back, side], pitch0 * (1.0 - s), height, 0.0)
             }
             Mode::Crawl => {
                 let dv = p.max_accel * CONTROL_DT;
@@ -1767,6 +1819,100 @@ mod tests {
         );
         // Over the ankles: no extra push.
         assert_eq!(push(on, false), push(off, false));
+    }
+
+    /// Knee, hip and ankle pitch targets (right, left) `secs` into the get-up (or,
+    /// `down`, the get-down) of a body rolled `roll` (> 0: right side low).
+    fn transition_legs(params: CrawlParams, roll: f64, down: bool, secs: f64) -> [[f64; 3]; 2] {
+        let mut obs = crawling_obs();
+        obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
+        let mut gait = crawling_gait(params);
+        if down {
+            gait.begin_down(&obs);
+        } else {
+            gait.begin_up(&obs);
+        }
+        let mut out = Action::default();
+        for _ in 0..(secs / CONTROL_DT) as usize {
+            gait.act(&obs, &mut out);
+        }
+        let (j, q) = (&gait.joints, &out.pd_targets);
+        [0, 1].map(|leg| [q[j.knee[leg]], q[j.hip[leg][1]], q[j.ankle[leg][0]]])
+    }
+
+    #[test]
+    fn the_get_down_straightens_the_low_sides_leg_into_the_squat_under_down_level() {
+        let off = CrawlParams {
+            down_level: 0.0,
+            up_level: 0.0,
+            ..CrawlParams::default()
+        };
+        let on = CrawlParams {
+            down_level: 1.0,
+            ..off
+        };
+        // Into the squat (0.5 s of the 1.5 s get-down): the right (low) knee 0.2 rad
+        // straighter than without, the left 0.2 rad more bent.
+        let [right, left] = transition_legs(on, 0.2, true, 0.5);
+        let [right_off, left_off] = transition_legs(off, 0.2, true, 0.5);
+        assert!(
+            (right[0] - (right_off[0] - 0.2)).abs() < 1e-9,
+            "{right:?} / {right_off:?}"
+        );
+        assert!(
+            (left[0] - (left_off[0] + 0.2)).abs() < 1e-9,
+            "{left:?} / {left_off:?}"
+        );
+        // Kneeling at the end: nearly faded out (0.2 rad into the squat).
+        let end = off.down_time - CONTROL_DT;
+        let knee = |p| transition_legs(p, 0.2, true, end)[0][0];
+        assert!(
+            (knee(on) - knee(off)).abs() < 0.02,
+            "{} / {}",
+            knee(on),
+            knee(off)
+        );
+        // The get-up does not read it.
+        assert_eq!(
+            transition_legs(on, 0.2, false, 1.0),
+            transition_legs(off, 0.2, false, 1.0)
+        );
+    }
+
+    #[test]
+    fn the_get_up_straightens_the_low_sides_leg_under_up_level() {
+        let legs = |params: CrawlParams, roll: f64| transition_legs(params, roll, false, 1.0);
+        let off = CrawlParams {
+            up_level: 0.0,
+            ..CrawlParams::default()
+        };
+        let on = CrawlParams {
+            up_level: 1.0,
+            ..off
+        };
+        let [right, left] = legs(on, 0.2);
+        let [right_off, left_off] = legs(off, 0.2);
+        assert_eq!(right_off, left_off, "off: the legs move alike");
+        // The right knee straightens by 0.2 rad, the left bends by 0.2; hip and ankle
+        // take half of it the other way, so the foot keeps its pitch.
+        for (k, (a, b)) in [(right, right_off), (left, left_off)]
+            .into_iter()
+            .enumerate()
+        {
+            let e = if k == 0 { 0.2 } else { -0.2 };
+            assert!((a[0] - (b[0] - e)).abs() < 1e-9, "knee {a:?} against {b:?}");
+            assert!(
+                (a[1] - (b[1] + 0.5 * e)).abs() < 1e-9,
+                "hip {a:?} against {b:?}"
+            );
+            assert!(
+                (a[2] - (b[2] + 0.5 * e)).abs() < 1e-9,
+                "ankle {a:?} against {b:?}"
+            );
+        }
+        // Rolled left: the other way round.
+        let [right_l, left_l] = legs(on, -0.2);
+        assert!(right_l[0] > left_l[0], "{right_l:?} against {left_l:?}");
     }
 
     #[test]
