@@ -569,19 +569,29 @@ pub fn tune(
         // One scenario set for the whole run: a deterministic objective.
         let scenario_seed = s.seed;
         let samples = es.ask(&mut rng);
+        // The whole generation at once: a candidate's rollouts alone leave most cores
+        // idle behind its slowest one (a rapier rollout). Collected in order, so the
+        // search is the same on any number of cores.
+        let evaluated: Vec<Result<(TunedParams, Cost)>> = samples
+            .par_iter()
+            .map(|smp| {
+                let p = decode(base, s.form, &smp.x);
+                let c = match p.validate() {
+                    Ok(()) => evaluate_on(&grounds, &p, s, scenario_seed)?,
+                    Err(_) => Cost {
+                        total: 1e3,
+                        ..Default::default()
+                    },
+                };
+                Ok((p, c))
+            })
+            .collect();
         let mut costs = Vec::with_capacity(samples.len());
         let mut gen_best: Option<(TunedParams, Cost)> = None;
-        for smp in &samples {
-            let p = decode(base, s.form, &smp.x);
+        for (smp, evaluated) in samples.iter().zip(evaluated) {
+            let (p, c) = evaluated?;
             // Out-of-box candidates are clamped and pay for the distance.
             let outside: f64 = smp.x.iter().map(|v| (v - v.clamp(0.0, 1.0)).powi(2)).sum();
-            let c = match p.validate() {
-                Ok(()) => evaluate_on(&grounds, &p, s, scenario_seed)?,
-                Err(_) => Cost {
-                    total: 1e3,
-                    ..Default::default()
-                },
-            };
             costs.push(c.total + outside);
             if gen_best.as_ref().is_none_or(|(_, b)| c.total < b.total) {
                 gen_best = Some((p, c));
