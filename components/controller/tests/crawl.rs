@@ -365,6 +365,65 @@ pub fn stands_up_into_a_crouch_walk(kind: BackendKind) {
     );
 }
 
+/// A body put down on forearms and knees (a start boxed in by a low top, a fall's
+/// reset under one) under a crouch-walk's 0.8 m plan: with `reset_kneeling_crawls` the
+/// crawl takes it from the first step and gets up into the crouch-walk. The biped
+/// gait, handed the kneeling body, straightened one leg and fell within a second
+/// (MuJoCo's random-411 and random-899 at their starts).
+pub fn gets_up_from_a_kneeling_start_into_a_crouch_walk(kind: BackendKind) {
+    let scene = flat_scene(12.0);
+    let mut physics = create_backend(kind, &scene, &PhysicsSettings::default()).unwrap();
+    physics
+        .reset(&HumanoidPose::crawling_on(&scene.terrain, 0.0, 0.0, 0.0))
+        .unwrap();
+    let crawl = CrawlParams {
+        reset_kneeling_crawls: true,
+        ..CrawlParams::default()
+    };
+    let mut policy =
+        ModelBasedController::with_all_params(GaitParams::default(), crawl, settings()).unwrap();
+    let path = StraightPath {
+        start: [0.0, 0.0],
+        speed: 0.3,
+        head_height: 0.8,
+    };
+    let mut obs = Observation::new(ModelBasedController::LAYOUT);
+    let mut action = Action::zeros(ModelBasedController::LAYOUT.num_joints);
+    let mut lowest_late = f64::INFINITY;
+    for c in 0..(8 * 30) {
+        let t = c as f64 / 30.0;
+        let state = physics.state().clone();
+        if t > 4.0 {
+            lowest_late = lowest_late.min(state.head[2]);
+        }
+        control_step(
+            physics.as_mut(),
+            &state,
+            &path,
+            &scene,
+            t,
+            &mut policy,
+            &mut obs,
+            &mut action,
+        )
+        .unwrap();
+        if c == 0 {
+            assert!(
+                policy.is_crawling(),
+                "{kind}: the biped took the kneeling body"
+            );
+        }
+    }
+    assert!(
+        !policy.is_crawling(),
+        "{kind}: still in the crawl gait after 8 s"
+    );
+    assert!(
+        lowest_late > 0.6,
+        "{kind}: head down to {lowest_late} m after 4 s (a crouch-walk's is ~0.8 m)"
+    );
+}
+
 /// The crouch-walk after a crawl on the gravel strip (12 staggered starts, 12 s): the
 /// get-up straightened its legs with the centre of mass ahead of the ankles and
 /// tipped forward. Measured over the 12 starts: without `up_com_gain` MuJoCo 10,
@@ -658,6 +717,10 @@ macro_rules! crawl_suite {
             #[test]
             fn stands_up_into_a_crouch_walk() {
                 super::stands_up_into_a_crouch_walk($kind);
+            }
+            #[test]
+            fn gets_up_from_a_kneeling_start_into_a_crouch_walk() {
+                super::gets_up_from_a_kneeling_start_into_a_crouch_walk($kind);
             }
             #[test]
             fn stands_up_on_gravel_into_a_crouch_walk() {

@@ -413,6 +413,13 @@ pub struct CrawlParams {
     /// tours, seeds 0-599: 471 of 600 without, 465 at 2.0, 454 at 1.0).
     #[serde(default)]
     pub down_level: f64,
+    /// Whether a body found on hands and knees after a reset (a start boxed in by a
+    /// low top, a fall's reset under one) with a plan above `crawl_below` starts in
+    /// the crawl, which gets up from there as after a crawl leg. The biped gait,
+    /// started on a kneeling body under a crouch-walk's 0.8 m plan, straightened one
+    /// leg and fell within a second (RESULTS "Crawl", session 24). Off: the biped.
+    #[serde(default)]
+    pub reset_kneeling_crawls: bool,
     /// Sideways speed the get-up's residual asks for per m the centre of mass is
     /// outside the ankles' width \[1/s\] (as `down_com_gain` does getting down).
     /// 0: off.

@@ -128,6 +128,8 @@ pub struct ModelBasedController {
     braking: f64,
     /// The observation the biped brakes on (the plan held at the head).
     brake_obs: Observation,
+    /// Whether no step has been taken since the start or a reset.
+    fresh: bool,
 }
 
 impl ModelBasedController {
@@ -162,6 +164,7 @@ impl ModelBasedController {
             crawling: false,
             braking: 0.0,
             brake_obs: Observation::new(Self::LAYOUT),
+            fresh: true,
         })
     }
 
@@ -219,10 +222,19 @@ impl Policy for ModelBasedController {
         // asked for 0.8 m minus the descent ahead and went down on hands and knees.
         let requested =
             obs.root_height + obs.head_pos[2] + obs.waypoints[0][2] - obs.waypoint_ground[0];
-        let p = self.crawl.params();
+        let p = *self.crawl.params();
         let (below, above) = (p.crawl_below, p.stand_above);
         if requested >= below {
             self.braking = 0.0;
+        }
+        if std::mem::take(&mut self.fresh)
+            && p.reset_kneeling_crawls
+            && !self.crawling
+            && requested >= below
+            && obs.root_height + obs.head_pos[2] < below
+        {
+            self.crawling = true;
+            self.crawl.reset();
         }
         if !self.crawling && requested < below {
             // Getting down at a walk pitches the body onto its head before the hands
@@ -268,6 +280,7 @@ impl Policy for ModelBasedController {
         self.crawl.reset();
         self.crawling = false;
         self.braking = 0.0;
+        self.fresh = true;
     }
 
     fn name(&self) -> &str {
