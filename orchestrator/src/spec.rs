@@ -18,6 +18,12 @@ use crate::seeds::splitmix;
 pub const SEED_YAW_JITTER: f64 = 0.05;
 /// Spacing of the rings searched for a start where a standing body fits \[m\].
 const START_SEARCH_STEP: f64 = 0.1;
+/// Radius of ground a standing start needs level \[m\]: the feet and their first step.
+const START_FOOTPRINT: f64 = 0.3;
+/// Largest height change between ground points a terrain cell apart within
+/// [`START_FOOTPRINT`] of a start \[m\]: a slope of 0.7 rad (the planner's steepest)
+/// changes 0.084 m per 0.1 m cell; a tile's edge changes more at once.
+const START_MAX_STEP: f64 = 0.1;
 
 /// Default simulated-time limit of a run (`plamo run` and every eval): this many
 /// times the planned route time...
@@ -139,16 +145,52 @@ pub fn physics_settings_or_default(path: Option<&Path>) -> Result<PhysicsSetting
 }
 
 /// Where a humanoid starts in `region`: its centre, or where the centre has no room
-/// to stand (a low top over it, a wall beside it) the nearest spot of the region
-/// that has, searched on rings [`START_SEARCH_STEP`] apart. A body spawned standing
+/// to stand (a low top over it, a wall beside it) or no level ground
+/// ([`level_start`]) the nearest spot of the region that has both, searched on rings
+/// [`START_SEARCH_STEP`] apart (without a level one, the centre or the nearest with
+/// room). A body spawned standing
 /// into a ceiling is thrown out of it by the physics at several m/s. The centre if
 /// no spot of the region fits: the lockstep's first control step then puts the body
 /// in the plan's form there (on hands and knees under a low top).
 fn start_spot(scene: &Scene, region: &Region) -> [f64; 2] {
     let c = region.center();
-    if stands_clear(scene, c[0], c[1]) {
+    let room = |p: [f64; 2]| stands_clear(scene, p[0], p[1]);
+    let fits = |p: [f64; 2]| room(p) && level_start(scene, p[0], p[1]);
+    if fits(c) {
         return c;
     }
+    // Level ground first; where the landmark has none, room to stand as before.
+    search_start(region, fits)
+        .or_else(|| {
+            if room(c) {
+                Some(c)
+            } else {
+                search_start(region, room)
+            }
+        })
+        .unwrap_or(c)
+}
+
+/// Whether the ground within [`START_FOOTPRINT`] of (x, y) is free of steps: no two
+/// points a terrain cell apart differ by more than [`START_MAX_STEP`]. A body spawned
+/// with its feet across a tile's 0.35-0.45 m edge fell in its first second (random-294,
+/// random-521; RESULTS.md "Random 4-landmark scenes", session 24).
+fn level_start(scene: &Scene, x: f64, y: f64) -> bool {
+    let r = scene.terrain.resolution;
+    let n = (START_FOOTPRINT / r).ceil() as i32;
+    let h = |i: i32, j: i32| scene.height_at(x + f64::from(i) * r, y + f64::from(j) * r);
+    (-n..=n).all(|i| {
+        (-n..=n).all(|j| {
+            let c = h(i, j);
+            (c - h(i + 1, j)).abs() <= START_MAX_STEP && (c - h(i, j + 1)).abs() <= START_MAX_STEP
+        })
+    })
+}
+
+/// The first spot of `region` on rings [`START_SEARCH_STEP`] apart around its centre,
+/// nearest first, where `fits`.
+fn search_start(region: &Region, fits: impl Fn([f64; 2]) -> bool) -> Option<[f64; 2]> {
+    let c = region.center();
     let (lo, hi) = region.aabb();
     let reach = (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
     let rings = (reach / START_SEARCH_STEP).ceil() as usize;
@@ -161,8 +203,7 @@ fn start_spot(scene: &Scene, region: &Region) -> [f64; 2] {
                 [c[0] + d * a.cos(), c[1] + d * a.sin()]
             })
         })
-        .find(|p| region.contains(p[0], p[1]) && stands_clear(scene, p[0], p[1]))
-        .unwrap_or(c)
+        .find(|p| region.contains(p[0], p[1]) && fits(*p))
 }
 
 /// Agent `k`'s model-based controller with `params` (built-in where `None`).
@@ -435,5 +476,31 @@ thickness = 0.2
         // within a search step.
         let d = (p.x - 4.0).hypot(p.y - 4.0);
         assert!(p.x <= 3.7 + 1e-9 && d <= 0.4 + 1e-9, "({}, {})", p.x, p.y);
+    }
+
+    #[test]
+    fn a_start_on_a_tiles_edge_moves_onto_level_ground() {
+        // A 0.4 m high tile whose west edge (x 4.05) runs through the landmark's
+        // centre: the feet would straddle it.
+        let ledge = r#"
+[[terrain.tiles]]
+area = { min = [4.05, 0.0], max = [12.0, 8.0] }
+generator = { kind = "flat", height = 0.4 }
+"#;
+        let toml = OPEN.replacen("[[landmarks]]", &format!("{ledge}\n[[landmarks]]"), 1);
+        let (scene, p) = start(&toml);
+        assert!(
+            !level_start(&scene, 4.0, 4.0),
+            "the centre straddles the edge"
+        );
+        assert!(level_start(&scene, p.x, p.y), "({}, {})", p.x, p.y);
+        assert!(scene.landmark("a").unwrap().region.contains(p.x, p.y));
+        // Off the edge by the footprint and at most a search step more.
+        let off = (p.x - 4.05).abs();
+        assert!((0.3..=0.5).contains(&off), "({}, {})", p.x, p.y);
+        // Flat ground: the centre, as before.
+        let (flat, q) = start(OPEN);
+        assert!(level_start(&flat, 4.0, 4.0));
+        assert_eq!([q.x, q.y], [4.0, 4.0]);
     }
 }
