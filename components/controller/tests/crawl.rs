@@ -14,7 +14,7 @@ use plamo_controller::{
     ModelBasedController, Observation, RisingPath, StraightPath, Waypoint, ceiling_scene,
     control_step, flat_scene, run_path,
 };
-use plamo_physics::{BackendKind, HumanoidPose, PhysicsSettings, create_backend};
+use plamo_physics::{BackendKind, HumanoidPose, PhysicsBackend, PhysicsSettings, create_backend};
 
 /// The crawl speed of most cases here.
 const SPEED: f64 = 0.5;
@@ -282,36 +282,55 @@ pub fn stands_up_when_the_plan_rises(kind: BackendKind) {
         .reset(&HumanoidPose::standing_on(&scene.terrain, 0.0, 0.0, 0.0))
         .unwrap();
     let mut policy = ModelBasedController::new(settings()).unwrap();
+    let mut crawled = false;
+    drive(
+        physics.as_mut(),
+        &scene,
+        &path,
+        &mut policy,
+        9 * 30,
+        |_, t, head, policy| {
+            if (3.5..4.5).contains(&t) {
+                assert!(head < 0.6, "{kind}: head {head} m at {t} s: not crawling");
+                crawled |= policy.is_crawling();
+            }
+        },
+    );
+    assert!(crawled, "{kind}: never in the crawl gait");
+    let head = physics.state().head[2];
+    assert!(!policy.is_crawling(), "{kind}: still in the crawl gait");
+    assert!(head > 1.2, "{kind}: head {head} m after getting up");
+}
+
+/// Steps `policy` on `physics` along `path` for `steps` control steps at 30 Hz;
+/// before step `c` `each` sees `c`, its time \[s\], the head's height \[m\] and the
+/// policy.
+fn drive(
+    physics: &mut dyn PhysicsBackend,
+    scene: &plamo_scenes::Scene,
+    path: &dyn HeadPath,
+    policy: &mut ModelBasedController,
+    steps: usize,
+    mut each: impl FnMut(usize, f64, f64, &ModelBasedController),
+) {
     let mut obs = Observation::new(ModelBasedController::LAYOUT);
     let mut action = Action::zeros(ModelBasedController::LAYOUT.num_joints);
-    let mut crawled = false;
-    for c in 0..(9 * 30) {
+    for c in 0..steps {
         let t = c as f64 / 30.0;
         let state = physics.state().clone();
-        if (3.5..4.5).contains(&t) {
-            assert!(
-                state.head[2] < 0.6,
-                "{kind}: head {} m at {t} s: not crawling",
-                state.head[2]
-            );
-            crawled |= policy.is_crawling();
-        }
+        each(c, t, state.head[2], policy);
         control_step(
-            physics.as_mut(),
+            physics,
             &state,
-            &path,
-            &scene,
+            path,
+            scene,
             t,
-            &mut policy,
+            policy,
             &mut obs,
             &mut action,
         )
         .unwrap();
     }
-    assert!(crawled, "{kind}: never in the crawl gait");
-    let head = physics.state().head[2];
-    assert!(!policy.is_crawling(), "{kind}: still in the crawl gait");
-    assert!(head > 1.2, "{kind}: head {head} m after getting up");
 }
 
 /// A plan that crawls (head 0.4 m) and at `up_at` goes on as a crouch-walk (head
@@ -387,33 +406,26 @@ pub fn gets_up_from_a_kneeling_start_into_a_crouch_walk(kind: BackendKind) {
         speed: 0.3,
         head_height: 0.8,
     };
-    let mut obs = Observation::new(ModelBasedController::LAYOUT);
-    let mut action = Action::zeros(ModelBasedController::LAYOUT.num_joints);
     let mut lowest_late = f64::INFINITY;
-    for c in 0..(8 * 30) {
-        let t = c as f64 / 30.0;
-        let state = physics.state().clone();
-        if t > 4.0 {
-            lowest_late = lowest_late.min(state.head[2]);
-        }
-        control_step(
-            physics.as_mut(),
-            &state,
-            &path,
-            &scene,
-            t,
-            &mut policy,
-            &mut obs,
-            &mut action,
-        )
-        .unwrap();
-        if c == 0 {
-            assert!(
-                policy.is_crawling(),
-                "{kind}: the biped took the kneeling body"
-            );
-        }
-    }
+    drive(
+        physics.as_mut(),
+        &scene,
+        &path,
+        &mut policy,
+        8 * 30,
+        |c, t, head, policy| {
+            // After the first step.
+            if c == 1 {
+                assert!(
+                    policy.is_crawling(),
+                    "{kind}: the biped took the kneeling body"
+                );
+            }
+            if t > 4.0 {
+                lowest_late = lowest_late.min(head);
+            }
+        },
+    );
     assert!(
         !policy.is_crawling(),
         "{kind}: still in the crawl gait after 8 s"

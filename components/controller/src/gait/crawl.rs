@@ -420,11 +420,6 @@ pub struct CrawlParams {
     /// leg and fell within a second (RESULTS "Crawl", session 24). Off: the biped.
     #[serde(default)]
     pub reset_kneeling_crawls: bool,
-    /// Sideways speed the get-up's residual asks for per m the centre of mass is
-    /// outside the ankles' width \[1/s\] (as `down_com_gain` does getting down).
-    /// 0: off.
-    #[serde(default)]
-    pub up_side_gain: f64,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -537,11 +532,10 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 77] = [
+        let ranges: [(&'static str, f64, f64, f64); 76] = [
             ("turn_slowdown", self.turn_slowdown, 0.0, 10.0),
             ("up_level", self.up_level, 0.0, 5.0),
             ("down_level", self.down_level, 0.0, 5.0),
-            ("up_side_gain", self.up_side_gain, 0.0, 100.0),
             ("up_com_gain", self.up_com_gain, 0.0, 100.0),
             ("down_com_gain", self.down_com_gain, 0.0, 100.0),
             ("up_com_ahead", self.up_com_ahead, 0.0, 0.5),
@@ -1217,14 +1211,22 @@ impl CrawlGait {
         out: &mut [f64],
     ) {
         let squat = self.squat(up);
-        let share = self.params.squat_share;
-        let (a, b, s) = if u < share {
-            (from, &squat, smoothstep(u / share))
-        } else {
-            (&squat, to, smoothstep((u - share) / (1.0 - share)))
-        };
+        let (into, s) = self.squat_phase(u);
+        let (a, b) = if into { (from, &squat) } else { (&squat, to) };
         for (i, o) in out.iter_mut().enumerate() {
             *o = a[i] + s * (b[i] - a[i]);
+        }
+    }
+
+    /// Where a transition is at time share `u` in [0, 1]: whether it is still going
+    /// into the squat (the first `squat_share`), and its eased progress through that
+    /// half \[-\].
+    fn squat_phase(&self, u: f64) -> (bool, f64) {
+        let share = self.params.squat_share;
+        if u < share {
+            (true, smoothstep(u / share))
+        } else {
+            (false, smoothstep((u - share) / (1.0 - share)))
         }
     }
 
@@ -1342,11 +1344,9 @@ impl CrawlGait {
                 self.pose_targets(&f, &contacts, [0.0; 2], [false; 2], [None; 2], &mut crawl);
                 self.through_squat(false, &self.from, &crawl, t / p.down_time, targets);
                 // Into the squat only: kneeling, the crawl's own roll feedback takes over.
-                let u = t / p.down_time;
-                let fade = if u < p.squat_share {
-                    1.0
-                } else {
-                    1.0 - smoothstep((u - p.squat_share) / (1.0 - p.squat_share))
+                let fade = match self.squat_phase(t / p.down_time) {
+                    (true, _) => 1.0,
+                    (false, out) => 1.0 - out,
                 };
                 self.level_legs(fade * p.down_level, roll, targets);
                 let t = t + CONTROL_DT;
@@ -1391,7 +1391,7 @@ impl CrawlGait {
                 }
                 self.through_squat(true, &self.from, &stand, t / p.up_time, targets);
                 self.level_legs(p.up_level, roll, targets);
-                let u = t / p.up_time;
+                let (into, out) = self.squat_phase(t / p.up_time);
                 self.mode = Mode::Up {
                     t: t + CONTROL_DT,
                     pitch0,
@@ -1400,23 +1400,18 @@ impl CrawlGait {
                 let stand_height = plamo_physics::humanoid::STANDING_PELVIS_HEIGHT - 0.02;
                 // Sitting back into the squat must let the pelvis sink onto the heels:
                 // no lift until the legs straighten.
-                let height = if u < p.squat_share {
+                let height = if into {
                     obs.root_height.min(height0)
                 } else {
-                    let s2 = smoothstep((u - p.squat_share) / (1.0 - p.squat_share));
-                    obs.root_height.min(height0) + s2 * (stand_height - height0).max(0.0)
+                    obs.root_height.min(height0) + out * (stand_height - height0).max(0.0)
                 };
                 // The hands push the body back over the feet while sitting back. The
                 // legs must straighten under the centre of mass: ahead of the ankles,
                 // the straightening legs tipped the whole body onto its face.
-                let (com, band) = com_over_feet(&self.mass_fraction, obs);
-                let back = if u < p.squat_share {
-                    -p.sit_back_speed
-                } else {
-                    0.0
-                } - p.up_com_gain * (com[0] - p.up_com_ahead).max(0.0);
-                let side = -p.up_side_gain * (com[1] - com[1].clamp(band[0], band[1]));
-                ([back, side], pitch0 * (1.0 - s), height, 0.0)
+                let ahead = com_over_feet(&self.mass_fraction, obs).0[0];
+                let back = if into { -p.sit_back_speed } else { 0.0 }
+                    - p.up_com_gain * (ahead - p.up_com_ahead).max(0.0);
+                ([back, 0.0], pitch0 * (1.0 - s), height, 0.0)
             }
             Mode::Crawl => {
                 let dv = p.max_accel * CONTROL_DT;
