@@ -34,6 +34,8 @@ fn tuning_the_crawl_writes_a_crawl_file_that_loads() {
         "rapier",
         "--physics-params",
         physics.to_str().unwrap(),
+        "--fall-cost",
+        "5",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -45,6 +47,7 @@ fn tuning_the_crawl_writes_a_crawl_file_that_loads() {
         "{text}"
     );
     assert!(text.contains("--physics-params"), "{text}");
+    assert!(text.contains("--fall-cost 5"), "{text}");
     plamo_controller::CrawlParams::load(&out).unwrap();
     // Not a terminal: progress comes as one log line per generation.
     let log = String::from_utf8_lossy(&o.stderr);
@@ -57,7 +60,7 @@ fn bad_tuning_arguments_are_refused_by_name() {
     let bad = dir.join("physics.toml");
     std::fs::write(&bad, "frction = 0.5\n").unwrap();
     let bad = bad.to_str().unwrap();
-    let cases: [(&[&str], &str); 4] = [
+    let cases: [(&[&str], &str); 5] = [
         (&["--form", "hop"], "walk, run, crouch, crawl"),
         (&["--physics-params", bad, "--budget", "1"], "frction"),
         (
@@ -65,6 +68,10 @@ fn bad_tuning_arguments_are_refused_by_name() {
             "start-like works",
         ),
         (&["--terrains", "ruff", "--budget", "1"], "`ruff`"),
+        (
+            &["--fall-cost", "-1", "--budget", "1"],
+            "--fall-cost must be",
+        ),
     ];
     for (args, needle) in cases {
         let o = plamo(args);

@@ -31,6 +31,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             ..Default::default()
         },
         physics: Default::default(),
+        fall_cost: None,
         // PLAMO_TUNE_TERRAINS=flat,rough,stairs tunes on terrain strips too.
         terrains: std::env::var("PLAMO_TUNE_TERRAINS")
             .unwrap_or_else(|_| "flat".into())

@@ -310,6 +310,10 @@ pub struct TuneSettings {
     /// its `terrain-` prefix (`slope`, `rough`, `stairs`; the strips of `plamo eval
     /// locomotion`).
     pub terrains: Vec<String>,
+    /// Cost of a fall per rollout \[m-equivalent\]; `None` takes the form's own
+    /// (3 for the run and the crawl, 1 for the walk and the crouch). The Table 2
+    /// strips ask for no falls at all: a search there may weigh them up.
+    pub fall_cost: Option<f64>,
 }
 
 /// Cost of a rollout whose simulation diverged \[m-equivalent\]: ten of the costliest
@@ -481,7 +485,7 @@ fn evaluate_on(
                 total: m.xy_err_mean
                     + s.form.z_weight() * m.z_err_mean
                     + RESIDUAL_COST * m.residual_force_mean
-                    + s.form.fall_cost() * falls
+                    + s.fall_cost.unwrap_or(s.form.fall_cost()) * falls
                     + heading,
                 falls,
                 xy: m.xy_err_mean,

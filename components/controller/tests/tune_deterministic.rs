@@ -4,7 +4,8 @@
 //! command that reproduces `params/gait.toml`.)
 
 use plamo_controller::{
-    ControllerSettings, CrawlParams, Form, GaitParams, TuneSettings, TunedParams, start_like, tune,
+    ControllerSettings, CrawlParams, Form, GaitParams, TuneSettings, TunedParams, evaluate,
+    start_like, tune,
 };
 use plamo_physics::BackendKind;
 
@@ -24,6 +25,7 @@ fn settings(form: Form, seed: u64, terrain: &str) -> TuneSettings {
         physics: Default::default(),
         // A terrain strip, so the scenario's ground comes from the built-in scenes.
         terrains: vec![terrain.into()],
+        fall_cost: None,
     }
 }
 
@@ -107,5 +109,30 @@ fn an_unknown_terrain_is_an_error_that_lists_the_known_ones() {
     assert!(
         msg.contains("`ruff`") && msg.contains("rough") && msg.contains("stairs"),
         "{msg}"
+    );
+}
+
+#[test]
+fn the_fall_cost_weighs_each_fall_as_set() {
+    // A walk whose torso servo is off falls within seconds; the same rollouts priced
+    // at 10 per fall instead of the walk's 1 cost 9 more per fall.
+    let mut params = TunedParams::default();
+    params.gait.walk.torso_kp = 0.0;
+    params.gait.walk.torso_kd = 0.0;
+    let base = TuneSettings {
+        duration: 4.0,
+        ..settings(Form::Walk, 3, "flat")
+    };
+    let heavy = TuneSettings {
+        fall_cost: Some(10.0),
+        ..base.clone()
+    };
+    let a = evaluate(&params, &base, 3).unwrap();
+    let b = evaluate(&params, &heavy, 3).unwrap();
+    assert!(a.falls > 0.0, "the servo-less walk did not fall: {a:?}");
+    assert_eq!(a.falls.to_bits(), b.falls.to_bits());
+    assert!(
+        ((b.total - a.total) - 9.0 * a.falls).abs() < 1e-9,
+        "{a:?} vs {b:?}"
     );
 }
