@@ -55,6 +55,14 @@ pub struct PhysicsSettings {
     /// in rapier was that sum. RESULTS.md "Rapier's root torque was summed over the
     /// steps (session 13)" and "the crawl under the torque per step (session 14)".
     pub rapier_root_torque_per_step: bool,
+    /// rapier: the terrain height field corrects contact normals at its triangles'
+    /// inner edges (parry's `FIX_INTERNAL_EDGES`; default false). Without it a foot or
+    /// knee sliding over a tile's seam can meet the next triangle's edge and get a
+    /// sideways push (a "ghost" collision) that a smooth surface would not give.
+    /// Measured (RESULTS.md "Rapier's height field without ghost edges", session 25):
+    /// rapier tours, seeds 0-199, 114 -> 114 of 200 (first falls on rough ground
+    /// 34 -> 19, on stairs 24 -> 28, flat 11 -> 18); Table 2 mixed. Off: no gain.
+    pub rapier_fix_internal_edges: bool,
     /// MuJoCo: maximum constraint-solver (Newton) iterations per step (default 50;
     /// MuJoCo's own default is 100, it converges in a few).
     pub mujoco_solver_iterations: usize,
@@ -78,6 +86,7 @@ impl Default for PhysicsSettings {
             rapier_solver_iterations: 4,
             rapier_contact_hz: 11.0,
             rapier_root_torque_per_step: true,
+            rapier_fix_internal_edges: false,
             mujoco_solver_iterations: 50,
             max_root_force: 2000.0,
             max_root_torque: 1000.0,

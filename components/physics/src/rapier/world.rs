@@ -88,9 +88,15 @@ pub(crate) fn terrain_collider(
     let sy = (g.ny - 1) as f64 * g.resolution;
     let center = [g.origin[0] + 0.5 * sx, g.origin[1] + 0.5 * sy, 0.0];
     let _ = settings.terrain_base; // a height field has no thickness in rapier
-    Ok(ColliderBuilder::heightfield(
+    let flags = if settings.rapier_fix_internal_edges {
+        HeightFieldFlags::FIX_INTERNAL_EDGES
+    } else {
+        HeightFieldFlags::empty()
+    };
+    Ok(ColliderBuilder::heightfield_with_flags(
         Array2::new(nrows, ncols, data),
         Vector::new(sx as f32, 1.0, sy as f32),
+        flags,
     )
     .position(Pose::from_parts(
         Vector::new(center[0] as f32, center[1] as f32, 0.0),
@@ -231,5 +237,28 @@ mod tests {
                 g.height_at(x, y)
             );
         }
+    }
+
+    #[test]
+    fn internal_edge_fixing_follows_the_setting() {
+        let scene = Scene {
+            name: "t".into(),
+            description: String::new(),
+            terrain: HeightGrid::flat([0.0, 0.0], [2.0, 2.0], 0.5, 0.0),
+            walls: vec![],
+            dynamic: vec![],
+            tops: vec![],
+            landmarks: vec![],
+        };
+        let flags = |fix: bool| {
+            let settings = PhysicsSettings {
+                rapier_fix_internal_edges: fix,
+                ..Default::default()
+            };
+            let c = terrain_collider(&scene, &settings).unwrap();
+            c.shape().as_heightfield().expect("a height field").flags()
+        };
+        assert!(flags(true).contains(HeightFieldFlags::FIX_INTERNAL_EDGES));
+        assert!(!flags(false).contains(HeightFieldFlags::FIX_INTERNAL_EDGES));
     }
 }
