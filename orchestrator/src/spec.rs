@@ -106,6 +106,12 @@ impl ControllerParams {
         })
     }
 
+    /// The gait parameters under `backend`: the file's, or the engine's built-in ones
+    /// ([`GaitParams::built_in`]).
+    pub fn gait_for(&self, backend: BackendKind) -> GaitParams {
+        self.gait.unwrap_or_else(|| GaitParams::built_in(backend))
+    }
+
     /// Whether both are the built-in parameters.
     pub fn is_built_in(&self) -> bool {
         self.gait.is_none() && self.crawl.is_none()
@@ -211,9 +217,10 @@ pub fn controller_with(
     scene: &Scene,
     k: usize,
     params: ControllerParams,
+    backend: BackendKind,
 ) -> Result<ControllerComponent, RunError> {
     let policy = ModelBasedController::with_all_params(
-        params.gait.unwrap_or_default(),
+        params.gait_for(backend),
         params.crawl.unwrap_or_default(),
         ControllerSettings::default(),
     )
@@ -305,7 +312,7 @@ impl RunSpec {
         let params =
             ControllerParams::load(self.params.gait.as_deref(), self.params.crawl.as_deref())
                 .map_err(setup)?;
-        controller_with(scene, k, params)
+        controller_with(scene, k, params, self.backend)
     }
 
     /// The physics settings: the spec's file, or the defaults.

@@ -827,3 +827,31 @@ fn a_planner_parameter_file_drives_the_planner_in_both_modes() {
         }
     }
 }
+
+/// Under rapier the built-in gait is `gait-rapier.toml`, not MuJoCo's `gait.toml`: the
+/// run with no file equals the run with the rapier file and differs from MuJoCo's.
+#[test]
+fn rapier_runs_on_its_own_built_in_gait_file() {
+    let params = Path::new(env!("CARGO_MANIFEST_DIR")).join("../components/controller/params");
+    let base = [
+        "--instructions",
+        ROUTE,
+        "--max-seconds",
+        "3",
+        "--seed",
+        "7",
+        "--physics",
+        "rapier",
+    ];
+    let run = |name: &str, file: Option<&str>| {
+        let mut args = base.to_vec();
+        let path = file.map(|f| params.join(f));
+        if let Some(p) = &path {
+            args.extend(["--gait-params", p.to_str().unwrap()]);
+        }
+        digest(&run_ok(&args, &out_dir(name)))
+    };
+    let built_in = run("gait-built-in-rapier", None);
+    assert_eq!(built_in, run("gait-rapier-file", Some("gait-rapier.toml")));
+    assert_ne!(built_in, run("gait-mujoco-file", Some("gait.toml")));
+}

@@ -334,7 +334,7 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
                 .duration
                 .min((STRIP_LENGTH - RUN_STAGGER * r as f64) / speed);
             let mut policy = ModelBasedController::with_all_params(
-                params.gait.unwrap_or_default(),
+                params.gait_for(backend),
                 params.crawl.unwrap_or_default(),
                 settings.clone(),
             )?;

@@ -269,7 +269,7 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
         ))],
         controllers: vec![Box::new(InProcess::new(
             "controller-0",
-            controller_with(scene, 0, spec.controller)?,
+            controller_with(scene, 0, spec.controller, run.backend)?,
         ))],
     };
     let mut ls = Lockstep::start(

@@ -8,8 +8,15 @@ use crate::error::{ControllerError, Result};
 /// Version of the gait parameter file format.
 pub const GAIT_PARAMS_VERSION: u32 = 1;
 
-/// The built-in parameter file.
+/// The built-in parameter file (MuJoCo's, and the one a caller that names no engine
+/// gets).
 pub const DEFAULT_GAIT_PARAMS: &str = include_str!("../../params/gait.toml");
+
+/// The built-in parameter file under rapier: `gait.toml` with the crouch and the walk
+/// re-tuned on the Table 2 strips in both engines with falls at 3 (its header has the
+/// commands). It gains rapier's tours and loses MuJoCo's (RESULTS.md "Gait parameters",
+/// session 25), so each engine gets its own.
+pub const DEFAULT_RAPIER_GAIT_PARAMS: &str = include_str!("../../params/gait-rapier.toml");
 
 /// A parameter file's TOML as `T`; `origin` names the source in errors.
 pub(crate) fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, origin: &Path) -> Result<T> {
@@ -258,6 +265,19 @@ impl Default for GaitParams {
 }
 
 impl GaitParams {
+    /// The built-in parameters for a physics engine: `gait-rapier.toml` under rapier,
+    /// `gait.toml` (the [`Default`]) under MuJoCo.
+    pub fn built_in(backend: plamo_physics::BackendKind) -> Self {
+        match backend {
+            plamo_physics::BackendKind::Rapier => Self::from_toml(
+                DEFAULT_RAPIER_GAIT_PARAMS,
+                Path::new("<built-in gait-rapier.toml>"),
+            )
+            .expect("built-in gait parameters are valid"),
+            plamo_physics::BackendKind::Mujoco => Self::default(),
+        }
+    }
+
     /// Parses and validates parameters; `origin` names the source in errors.
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
         let p: GaitParams = parse_toml(text, origin)?;
@@ -302,6 +322,20 @@ impl GaitParams {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_engine_has_its_own_built_in_file() {
+        use plamo_physics::BackendKind;
+        let (rapier, mujoco) = (
+            GaitParams::built_in(BackendKind::Rapier),
+            GaitParams::built_in(BackendKind::Mujoco),
+        );
+        rapier.validate().unwrap();
+        assert_eq!(mujoco, GaitParams::default());
+        assert_ne!(rapier.crouch, mujoco.crouch);
+        // The rapier file re-tuned the crouch and the walk; the run is MuJoCo's.
+        assert_eq!(rapier.run, mujoco.run);
+    }
 
     #[test]
     fn built_in_parameters_parse_and_blend() {
