@@ -133,11 +133,12 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
 fn the_humanoid_fmu_with_parameter_files_runs_as_the_in_process_lockstep_given_them() {
     let dir = tempfile::tempdir().unwrap();
     // Slower walking (the built-in walk reaches 1 m/s in these 4 s), so the planner file shows in the path; the gait and crawl files
-    // are copies of the shipped ones, read from where the parameter says.
+    // are copies of the shipped ones (rapier's built-in gait file: the FMU's physics is
+    // rapier), read from where the parameter says.
     let planner = write(dir.path(), "slow.toml", "walk_speed = 0.6\n");
     let gait = dir.path().join("gait.toml");
     let crawl = dir.path().join("crawl.toml");
-    std::fs::copy(params_dir().join("gait.toml"), &gait).unwrap();
+    std::fs::copy(params_dir().join("gait-rapier.toml"), &gait).unwrap();
     std::fs::copy(params_dir().join("crawl.toml"), &crawl).unwrap();
     // Stiffer contacts than the default 11 Hz.
     let physics = write(dir.path(), "stiff.toml", "rapier_contact_hz = 30.0\n");
