@@ -80,3 +80,42 @@ fn bad_tuning_arguments_are_refused_by_name() {
         assert!(err.contains(needle), "{args:?}: `{needle}` not in {err}");
     }
 }
+
+#[test]
+fn a_search_in_one_engine_starts_from_that_engines_gait() {
+    use plamo_controller::GaitParams;
+    use plamo_physics::BackendKind;
+    // A run search leaves the crouch as it found it: rapier's built-in crouch in rapier
+    // alone, MuJoCo's (gait.toml) in MuJoCo alone.
+    for (engine, kind) in [
+        ("rapier", BackendKind::Rapier),
+        ("mujoco", BackendKind::Mujoco),
+    ]
+    .into_iter()
+    .filter(|(_, kind)| kind.is_available())
+    {
+        let dir = support::out_dir("tune", &format!("start-{engine}"));
+        let out = dir.join("gait.toml");
+        let o = plamo(&[
+            "--form",
+            "run",
+            "--budget",
+            "1",
+            "--rollouts",
+            "1",
+            "--duration",
+            "0.5",
+            "--physics",
+            engine,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let tuned = GaitParams::load(&out).unwrap();
+        assert_eq!(tuned.crouch, GaitParams::built_in(kind).crouch, "{engine}");
+    }
+    assert_ne!(
+        GaitParams::built_in(BackendKind::Rapier).crouch,
+        GaitParams::built_in(BackendKind::Mujoco).crouch
+    );
+}

@@ -37,7 +37,8 @@ pub struct TuneArgs {
     #[arg(long, default_value_t = 8.0)]
     duration: f64,
     /// Starting parameter file of the form (a gait file, or a crawl file with
-    /// `--form crawl`; default: the built-in one).
+    /// `--form crawl`; default: the built-in one, for a gait search in rapier alone
+    /// rapier's `gait-rapier.toml`, else `gait.toml`).
     #[arg(long)]
     from: Option<PathBuf>,
     /// Start the search from another form's tuned parameters (e.g. `--start-like walk`
@@ -77,6 +78,10 @@ pub fn run(args: TuneArgs) -> anyhow::Result<ExitCode> {
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| anyhow::anyhow!("--physics: {e}"))?;
     let mut base = TunedParams::default();
+    // A search in one engine starts from that engine's built-in gait.
+    if let [only] = backends[..] {
+        base.gait = GaitParams::built_in(only);
+    }
     match (&args.from, form) {
         (Some(p), Form::Crawl) => base.crawl = CrawlParams::load(p)?,
         (Some(p), _) => base.gait = GaitParams::load(p)?,
