@@ -112,6 +112,19 @@ impl ControllerParams {
         self.gait.unwrap_or_else(|| GaitParams::built_in(backend))
     }
 
+    /// The model-based policy with these files under `backend` (built-in where `None`).
+    pub fn policy(
+        &self,
+        backend: BackendKind,
+        settings: ControllerSettings,
+    ) -> plamo_controller::Result<ModelBasedController> {
+        ModelBasedController::with_all_params(
+            self.gait_for(backend),
+            self.crawl.unwrap_or_default(),
+            settings,
+        )
+    }
+
     /// Whether both are the built-in parameters.
     pub fn is_built_in(&self) -> bool {
         self.gait.is_none() && self.crawl.is_none()
@@ -219,12 +232,9 @@ pub fn controller_with(
     params: ControllerParams,
     backend: BackendKind,
 ) -> Result<ControllerComponent, RunError> {
-    let policy = ModelBasedController::with_all_params(
-        params.gait_for(backend),
-        params.crawl.unwrap_or_default(),
-        ControllerSettings::default(),
-    )
-    .map_err(setup)?;
+    let policy = params
+        .policy(backend, ControllerSettings::default())
+        .map_err(setup)?;
     Ok(ControllerComponent::with_policy(
         k as u32,
         scene.clone(),

@@ -21,8 +21,8 @@ use plamo::progress::Progress;
 use plamo::spec::ControllerParams;
 use plamo::viz::{FAMILY, ensure_registered};
 use plamo_controller::{
-    ControllerSettings, MetricsSummary, ModelBasedController, RUN_STAGGER, RampedPath, START_ACCEL,
-    STRIP_LENGTH, StraightPath, run_path_with, staggered_start, terrain_scene,
+    ControllerSettings, MetricsSummary, RUN_STAGGER, RampedPath, START_ACCEL, STRIP_LENGTH,
+    StraightPath, run_path_with, staggered_start, terrain_scene,
 };
 use plamo_physics::BackendKind;
 use plamo_scenes::Scene;
@@ -333,11 +333,7 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
             let duration = a
                 .duration
                 .min((STRIP_LENGTH - RUN_STAGGER * r as f64) / speed);
-            let mut policy = ModelBasedController::with_all_params(
-                params.gait_for(backend),
-                params.crawl.unwrap_or_default(),
-                settings.clone(),
-            )?;
+            let mut policy = params.policy(backend, settings.clone())?;
             let m = run_path_with(
                 backend,
                 &physics_settings,

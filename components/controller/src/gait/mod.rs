@@ -222,13 +222,15 @@ impl Policy for ModelBasedController {
         // asked for 0.8 m minus the descent ahead and went down on hands and knees.
         let requested =
             obs.root_height + obs.head_pos[2] + obs.waypoints[0][2] - obs.waypoint_ground[0];
-        let p = *self.crawl.params();
+        let p = self.crawl.params();
         let (below, above) = (p.crawl_below, p.stand_above);
+        let (down_speed, brake_time) = (p.down_speed, p.brake_time);
+        let kneeling_crawls = p.reset_kneeling_crawls;
         if requested >= below {
             self.braking = 0.0;
         }
         if std::mem::take(&mut self.fresh)
-            && p.reset_kneeling_crawls
+            && kneeling_crawls
             && !self.crawling
             && requested >= below
             && obs.root_height + obs.head_pos[2] < below
@@ -241,7 +243,7 @@ impl Policy for ModelBasedController {
             // are down: the biped first brakes (the plan held at the head) to
             // `down_speed`, for at most `brake_time`.
             let speed = obs.root_lin_vel[0].hypot(obs.root_lin_vel[1]);
-            if speed > p.down_speed && self.braking < p.brake_time {
+            if speed > down_speed && self.braking < brake_time {
                 self.braking += plamo_interfaces::CONTROL_DT;
                 self.brake_obs.clone_from(obs);
                 self.brake_obs.waypoints = [[0.0; 3]; NUM_WAYPOINTS];

@@ -200,6 +200,19 @@ mod tests {
     use plamo_scenes::HeightGrid;
     use rapier3d::parry::query::Ray;
 
+    /// A scene of terrain alone.
+    fn bare(terrain: HeightGrid) -> Scene {
+        Scene {
+            name: "t".into(),
+            description: String::new(),
+            terrain,
+            walls: vec![],
+            dynamic: vec![],
+            tops: vec![],
+            landmarks: vec![],
+        }
+    }
+
     #[test]
     fn heightfield_matches_grid() {
         // An asymmetric surface: h = 0.3 x - 0.2 y + 0.1 x y on [2, 5] x [-1, 3].
@@ -210,15 +223,7 @@ mod tests {
                 g.heights[jj * g.nx + ii] = 0.3 * x - 0.2 * y + 0.1 * x * y;
             }
         }
-        let scene = Scene {
-            name: "t".into(),
-            description: String::new(),
-            terrain: g.clone(),
-            walls: vec![],
-            dynamic: vec![],
-            tops: vec![],
-            landmarks: vec![],
-        };
+        let scene = bare(g.clone());
         let c = terrain_collider(&scene, &PhysicsSettings::default()).unwrap();
         for &(x, y) in &[(2.0, -1.0), (2.3, 2.9), (4.9, -0.7), (3.5, 1.0), (4.0, 2.5)] {
             let ray = Ray::new(
@@ -241,15 +246,7 @@ mod tests {
 
     #[test]
     fn internal_edge_fixing_follows_the_setting() {
-        let scene = Scene {
-            name: "t".into(),
-            description: String::new(),
-            terrain: HeightGrid::flat([0.0, 0.0], [2.0, 2.0], 0.5, 0.0),
-            walls: vec![],
-            dynamic: vec![],
-            tops: vec![],
-            landmarks: vec![],
-        };
+        let scene = bare(HeightGrid::flat([0.0, 0.0], [2.0, 2.0], 0.5, 0.0));
         let flags = |fix: bool| {
             let settings = PhysicsSettings {
                 rapier_fix_internal_edges: fix,
