@@ -29,7 +29,7 @@
 use std::error::Error;
 
 use plamo_controller::{
-    ArcPath, ControllerSettings, CrawlParams, GaitParams, HeadPath, MetricsSummary,
+    ArcPath, ControllerSettings, CrawlParams, DropPath, GaitParams, HeadPath, MetricsSummary,
     ModelBasedController, RisingPath, START_ACCEL, StraightPath, TurnPath, ceiling_scene,
     flat_scene, ledge_scene, run_path_with, staggered_start,
 };
@@ -322,61 +322,6 @@ impl HeadPath for SidePath {
     }
     fn direction(&self, _t: f64) -> [f64; 2] {
         [0.0, self.side]
-    }
-    fn head_height(&self) -> f64 {
-        self.head_height
-    }
-}
-
-/// A plan that walks from rest (accelerating at 1 m/s^2 to `walk_speed`, head 1.47 m)
-/// and, from `drop_at`, goes on at `crawl_speed` with the head at `head_height`.
-struct DropPath {
-    start: [f64; 2],
-    walk_speed: f64,
-    crawl_speed: f64,
-    head_height: f64,
-    drop_at: f64,
-}
-
-impl DropPath {
-    /// Distance along +X and speed at `t`.
-    fn travel(&self, t: f64) -> (f64, f64) {
-        let ramp = self.walk_speed;
-        let walk = |t: f64| {
-            if t < ramp {
-                (0.5 * t * t, t)
-            } else {
-                (self.walk_speed * (t - 0.5 * ramp), self.walk_speed)
-            }
-        };
-        let t = t.max(0.0);
-        if t < self.drop_at {
-            walk(t)
-        } else {
-            let (d, _) = walk(self.drop_at);
-            (d + self.crawl_speed * (t - self.drop_at), self.crawl_speed)
-        }
-    }
-}
-
-impl HeadPath for DropPath {
-    fn point(&self, scene: &plamo_scenes::Scene, t: f64) -> plamo_controller::Waypoint {
-        let (d, v) = self.travel(t);
-        let (x, y) = (self.start[0] + d, self.start[1]);
-        let head = if t < self.drop_at {
-            plamo_physics::humanoid::STANDING_HEAD_HEIGHT
-        } else {
-            self.head_height
-        };
-        plamo_controller::Waypoint {
-            x,
-            y,
-            z: scene.height_at(x, y) + head,
-            v,
-        }
-    }
-    fn direction(&self, _t: f64) -> [f64; 2] {
-        [1.0, 0.0]
     }
     fn head_height(&self) -> f64 {
         self.head_height

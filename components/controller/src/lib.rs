@@ -37,7 +37,7 @@ pub use observation::{
 pub use onnx_policy::{OnnxPolicy, PolicySidecar};
 pub use policy::{Action, Policy, RootWrench};
 pub use rollout::{
-    ArcPath, HeadPath, RUN_STAGGER, RampedPath, RisingPath, START_ACCEL, STRIP_LENGTH,
+    ArcPath, DropPath, HeadPath, RUN_STAGGER, RampedPath, RisingPath, START_ACCEL, STRIP_LENGTH,
     StraightPath, TurnPath, ceiling_scene, control_step, flat_scene, ledge_scene, run_path,
     run_path_with, run_straight, staggered_start,
 };

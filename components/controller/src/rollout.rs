@@ -84,6 +84,70 @@ impl HeadPath for RisingPath {
     }
 }
 
+/// A straight plan along +X that walks from rest (accelerating at 1 m/s^2 to
+/// `walk_speed`, head 1.47 m) and, from `drop_at`, goes on at `crawl_speed` with the
+/// head at `head_height`: the get-down from a walk, as a tour's leg into a crawl (or a
+/// crouch-walk) starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DropPath {
+    /// Start of the head path (x, y) \[m\].
+    pub start: [f64; 2],
+    /// Speed of the walk before the drop \[m/s\].
+    pub walk_speed: f64,
+    /// Speed after the drop \[m/s\].
+    pub crawl_speed: f64,
+    /// Head height above the terrain after the drop \[m\].
+    pub head_height: f64,
+    /// When the head height drops \[s\].
+    pub drop_at: f64,
+}
+
+impl DropPath {
+    /// Distance along +X \[m\] and speed \[m/s\] at `t` \[s\].
+    fn travel(&self, t: f64) -> (f64, f64) {
+        // 1 m/s^2: the ramp lasts `walk_speed` seconds.
+        let ramp = self.walk_speed;
+        let walk = |t: f64| {
+            if t < ramp {
+                (0.5 * t * t, t)
+            } else {
+                (self.walk_speed * (t - 0.5 * ramp), self.walk_speed)
+            }
+        };
+        let t = t.max(0.0);
+        if t < self.drop_at {
+            walk(t)
+        } else {
+            let (d, _) = walk(self.drop_at);
+            (d + self.crawl_speed * (t - self.drop_at), self.crawl_speed)
+        }
+    }
+}
+
+impl HeadPath for DropPath {
+    fn point(&self, scene: &Scene, t: f64) -> Waypoint {
+        let (d, v) = self.travel(t);
+        let (x, y) = (self.start[0] + d, self.start[1]);
+        let head = if t < self.drop_at {
+            plamo_physics::humanoid::STANDING_HEAD_HEIGHT
+        } else {
+            self.head_height
+        };
+        Waypoint {
+            x,
+            y,
+            z: scene.height_at(x, y) + head,
+            v,
+        }
+    }
+    fn direction(&self, _t: f64) -> [f64; 2] {
+        [1.0, 0.0]
+    }
+    fn head_height(&self) -> f64 {
+        self.head_height
+    }
+}
+
 /// Acceleration from rest of the bench paths (tuning, `plamo eval locomotion`)
 /// \[m/s^2\]: a little below the gait's own rate limit (2.5 m/s^2), so a walker that
 /// keeps up is not left behind by the start.
@@ -517,6 +581,26 @@ mod tests {
         assert!((late.x - (line.at(&scene, 10.0).x - 4.0)).abs() < 1e-9);
         assert_eq!(late.v, 4.0);
         assert_eq!(late.z, 1.47);
+    }
+
+    #[test]
+    fn drop_path_walks_then_lowers_the_head_without_a_jump_in_place() {
+        let scene = flat_scene(100.0);
+        let p = DropPath {
+            start: [0.0, 1.0],
+            walk_speed: 1.5,
+            crawl_speed: 0.8,
+            head_height: 0.4,
+            drop_at: 3.0,
+        };
+        // 1.5 s up at 1 m/s^2 (1.125 m), then 1.5 s at 1.5 m/s: 3.375 m at the drop.
+        let (a, b) = (p.point(&scene, 3.0 - 1e-9), p.point(&scene, 3.0 + 1e-9));
+        assert!((a.x - 3.375).abs() < 1e-6 && (b.x - 3.375).abs() < 1e-6);
+        assert_eq!(a.z, plamo_physics::humanoid::STANDING_HEAD_HEIGHT);
+        assert_eq!((a.v, b.v), (1.5, 0.8));
+        assert_eq!(b.z, 0.4);
+        assert!((p.point(&scene, 5.0).x - (3.375 + 1.6)).abs() < 1e-9);
+        assert_eq!(p.point(&scene, 5.0).y, 1.0);
     }
 
     #[test]

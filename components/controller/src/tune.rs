@@ -15,8 +15,8 @@ pub use cmaes::{Rng, Sample, SepCmaEs};
 use crate::error::{ControllerError, Result};
 use crate::gait::{CrawlParams, FormParams, GaitParams, ModelBasedController};
 use crate::rollout::{
-    ArcPath, HeadPath, RampedPath, START_ACCEL, StraightPath, ceiling_scene, flat_scene,
-    run_path_with,
+    ArcPath, DropPath, HeadPath, RampedPath, RisingPath, START_ACCEL, StraightPath, TurnPath,
+    ceiling_scene, flat_scene, run_path_with,
 };
 use crate::settings::ControllerSettings;
 
@@ -306,9 +306,13 @@ pub struct TuneSettings {
     pub physics: PhysicsSettings,
     /// Ground of the rollouts, assigned round-robin: `flat`, `ceiling` (flat under a
     /// 0.6 m ceiling, for the crawl), `arc` (a turn on flat ground, left and right
-    /// alternately; its cost counts the heading too) or the name of a built-in terrain strip without
-    /// its `terrain-` prefix (`slope`, `rough`, `stairs`; the strips of `plamo eval
-    /// locomotion`).
+    /// alternately; its cost counts the heading too), `drop` (flat: a walk at the
+    /// rollout's speed that drops to the form's head height at [`DROP_AT`]), `rise`
+    /// (flat: the form from the start, standing up at half the rollout), `turnback`
+    /// (flat: a stop after 3 m and back at [`TURN_BACK`], left and right alternately) or the name of
+    /// `hill` (a straight path across two hills' flanks) or a built-in terrain strip
+    /// without its `terrain-` prefix (`slope`, `rough`,
+    /// `stairs`; the strips of `plamo eval locomotion`).
     pub terrains: Vec<String>,
     /// Cost of a fall per rollout \[m-equivalent\]; `None` takes the form's own
     /// (3 for the run and the crawl, 1 for the walk and the crouch). The Table 2
@@ -368,40 +372,110 @@ pub fn terrain_scene(name: &str) -> Result<(plamo_scenes::Scene, [f64; 2])> {
     match name {
         "flat" => return Ok((flat_scene(60.0), [0.0, 0.0])),
         "ceiling" => return Ok((ceiling_scene(60.0), [0.0, 0.0])),
+        "hill" => {
+            let scene = plamo_scenes::from_toml_str(HILL_SCENE, "tune-hill (built-in)")
+                .expect("the built-in hill ground is valid");
+            return Ok((scene, [2.0, 5.0]));
+        }
         _ => {}
     }
     let scene = plamo_scenes::builtin(&format!("terrain-{name}")).map_err(|e| {
         ControllerError::InvalidSettings {
             field: "terrains",
-            reason: format!("unknown terrain `{name}` (flat, slope, rough, stairs, ceiling): {e}"),
+            reason: format!(
+                "unknown terrain `{name}` (flat, slope, rough, stairs, ceiling, hill, arc, drop, rise, turnback): {e}"
+            ),
         }
     })?;
     Ok((scene, [5.0, 3.0]))
 }
+
+/// The `hill` ground: two cosine hills 0.8 m high and 3.5 m in radius (a random
+/// tour's hill tiles are 0.2-1 m by 2.5-4.5 m), 1.5 m left then 1.5 m right of a
+/// straight path along y = 5 m from x = 2 m, so the path crosses their flanks at up
+/// to ~19 degrees, mostly across it: the slope a tour's crawl meets side-on, which
+/// the strips (up and down an 8 degree ridge) do not have.
+const HILL_SCENE: &str = r#"
+name = "tune-hill"
+description = "tuning ground: a straight path across the flanks of two cosine hills"
+
+[terrain]
+size = [40.0, 10.0]
+
+[[terrain.tiles]]
+generator = { kind = "hill", center = [6.0, 6.5], radius = 3.5, height = 0.8, profile = "cosine" }
+
+[[terrain.tiles]]
+generator = { kind = "hill", center = [13.0, 3.5], radius = 3.5, height = 0.8, profile = "cosine" }
+
+[[landmarks]]
+name = "start"
+region = { kind = "circle", center = [2.0, 5.0], radius = 0.75 }
+
+[[landmarks]]
+name = "goal"
+region = { kind = "circle", center = [30.0, 5.0], radius = 0.75 }
+"#;
 
 /// Evaluates `params` on the scenarios drawn for `seed` (same seed, same scenarios).
 pub fn evaluate(params: &TunedParams, s: &TuneSettings, seed: u64) -> Result<Cost> {
     evaluate_on(&grounds(s)?, params, s, seed)
 }
 
-/// The rollouts' grounds for `s.terrains` (scene, start, whether the path is an arc):
-/// built once per search, not per candidate (a terrain strip is generated from its
-/// scene file).
-fn grounds(s: &TuneSettings) -> Result<Vec<(plamo_scenes::Scene, [f64; 2], bool)>> {
+/// When a `drop` rollout's plan leaves the walk for the form's head height \[s\]:
+/// the walk from rest has reached its speed (1 m/s^2 up to at most 2 m/s).
+pub const DROP_AT: f64 = 3.0;
+
+/// The shape of a rollout's plan on its ground.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Course {
+    /// Straight from rest at the form's head height ([`RampedPath`]).
+    Straight,
+    /// A 4 m turn, left and right alternately ([`ArcPath`]).
+    Arc,
+    /// A walk that drops to the form ([`DropPath`]): a tour's form change.
+    Drop,
+    /// The form, then standing up at half the rollout ([`RisingPath`]).
+    Rise,
+    /// A stop at a corner and back the other way ([`TurnPath`], [`TURN_BACK`]): a
+    /// tour's landmark.
+    TurnBack,
+}
+
+/// Turn at a `turnback` rollout's corner, left and right alternately \[rad\]: most
+/// legs of the random tours turn back at their landmark by 2-3 rad.
+pub const TURN_BACK: f64 = 2.6;
+
+/// Length of a `turnback` rollout's first leg \[m\].
+const TURN_BACK_FIRST: f64 = 3.0;
+
+/// One rollout ground: the scene, where the plan starts, and the plan's shape.
+type Ground = (plamo_scenes::Scene, [f64; 2], Course);
+
+/// The rollouts' grounds for `s.terrains`: built once per search, not per candidate
+/// (a terrain strip is generated from its scene file).
+fn grounds(s: &TuneSettings) -> Result<Vec<Ground>> {
     // `arc` turns on flat ground (a crawl tuned on straight paths alone lost its
-    // heading control); every other name is a ground for a straight path.
+    // heading control); `drop` and `rise` change form and `turnback` stops and turns
+    // back on flat ground, as a tour's legs do; every other name is a ground for a
+    // straight path.
+    let flat = |course| Ok((flat_scene(60.0), [0.0, 0.0], course));
     let grounds = s
         .terrains
         .iter()
         .map(|t| match t.as_str() {
-            "arc" => Ok((flat_scene(60.0), [0.0, 0.0], true)),
-            _ => terrain_scene(t).map(|(scene, start)| (scene, start, false)),
+            "arc" => flat(Course::Arc),
+            "drop" => flat(Course::Drop),
+            "rise" => flat(Course::Rise),
+            "turnback" => flat(Course::TurnBack),
+            _ => terrain_scene(t).map(|(scene, start)| (scene, start, Course::Straight)),
         })
         .collect::<Result<Vec<_>>>()?;
     if grounds.is_empty() {
         return Err(ControllerError::InvalidSettings {
             field: "terrains",
-            reason: "no terrain to tune on (flat, slope, rough, stairs)".into(),
+            reason: "no terrain to tune on (flat, slope, rough, stairs, ceiling, hill, arc, drop, rise, turnback)"
+                .into(),
         });
     }
     Ok(grounds)
@@ -409,7 +483,7 @@ fn grounds(s: &TuneSettings) -> Result<Vec<(plamo_scenes::Scene, [f64; 2], bool)
 
 /// [`evaluate`] on grounds already built by [`grounds`].
 fn evaluate_on(
-    grounds: &[(plamo_scenes::Scene, [f64; 2], bool)],
+    grounds: &[Ground],
     params: &TunedParams,
     s: &TuneSettings,
     seed: u64,
@@ -435,24 +509,45 @@ fn evaluate_on(
                 params.crawl,
                 s.controller.clone(),
             )?;
-            let (scene, start, arc) = &grounds[(k % s.rollouts.max(1)) % grounds.len()];
-            let path: Box<dyn HeadPath> = if *arc {
-                Box::new(ArcPath {
-                    start: *start,
+            let (scene, start, course) = &grounds[(k % s.rollouts.max(1)) % grounds.len()];
+            let (start, arc) = (*start, *course == Course::Arc);
+            let line = StraightPath {
+                start,
+                speed,
+                head_height: head,
+            };
+            let path: Box<dyn HeadPath> = match course {
+                Course::Arc => Box::new(ArcPath {
+                    start,
                     speed,
                     head_height: head,
                     straight: 2.0,
                     radius: if k % 2 == 0 { ARC_RADIUS } else { -ARC_RADIUS },
-                })
-            } else {
-                Box::new(RampedPath {
-                    line: StraightPath {
-                        start: *start,
-                        speed,
-                        head_height: head,
-                    },
+                }),
+                Course::Straight => Box::new(RampedPath {
+                    line,
                     accel: START_ACCEL,
-                })
+                }),
+                Course::Drop => Box::new(DropPath {
+                    start,
+                    walk_speed: speed.min(2.0),
+                    crawl_speed: speed,
+                    head_height: head,
+                    drop_at: DROP_AT,
+                }),
+                Course::Rise => Box::new(RisingPath {
+                    line,
+                    up_at: 0.5 * s.duration,
+                }),
+                Course::TurnBack => Box::new(TurnPath {
+                    start,
+                    speed,
+                    corner_speed: 0.0,
+                    head_height: head,
+                    first: TURN_BACK_FIRST,
+                    turn: if k % 2 == 0 { TURN_BACK } else { -TURN_BACK },
+                    accel: 1.0,
+                }),
             };
             let m = match run_path_with(
                 backend,
@@ -476,7 +571,7 @@ fn evaluate_on(
                 Err(e) => return Err(e),
             };
             let falls = f64::from(m.falls);
-            let heading = if *arc {
+            let heading = if arc {
                 ARC_HEADING_COST * (1.0 - m.mean_reward.dir)
             } else {
                 0.0

@@ -5,7 +5,7 @@
 
 use plamo_controller::{
     ControllerSettings, CrawlParams, Form, GaitParams, TuneSettings, TunedParams, evaluate,
-    start_like, tune,
+    start_like, terrain_scene, tune,
 };
 use plamo_physics::BackendKind;
 
@@ -107,7 +107,11 @@ fn an_unknown_terrain_is_an_error_that_lists_the_known_ones() {
     .unwrap_err();
     let msg = err.to_string();
     assert!(
-        msg.contains("`ruff`") && msg.contains("rough") && msg.contains("stairs"),
+        msg.contains("`ruff`")
+            && msg.contains("rough")
+            && msg.contains("stairs")
+            && msg.contains("drop")
+            && msg.contains("rise"),
         "{msg}"
     );
 }
@@ -134,5 +138,60 @@ fn the_fall_cost_weighs_each_fall_as_set() {
     assert!(
         ((b.total - a.total) - 9.0 * a.falls).abs() < 1e-9,
         "{a:?} vs {b:?}"
+    );
+}
+
+#[test]
+fn the_form_changing_grounds_change_the_rollouts() {
+    // The crawl on flat ground from the start, after a 3 s walk (`drop`), and standing
+    // up at half the rollout (`rise`): same seed, same speeds, three different plans.
+    let cost = |terrain: &str| {
+        let s = TuneSettings {
+            duration: 4.0,
+            ..settings(Form::Crawl, 3, terrain)
+        };
+        evaluate(&TunedParams::default(), &s, 3).unwrap()
+    };
+    let (flat, drop, rise) = (cost("flat"), cost("drop"), cost("rise"));
+    // Walking until 3 s keeps the head ~1 m above the crawl's plan in the flat rollout;
+    // the drop's head is near its own plan until then.
+    assert!(drop.z < flat.z, "drop {drop:?} vs flat {flat:?}");
+    // The rise's plan goes up to 1.47 m at 2 s while the crawler is still down.
+    assert!(rise.z > flat.z, "rise {rise:?} vs flat {flat:?}");
+}
+
+#[test]
+fn the_turnback_ground_stops_and_turns_the_plan_back() {
+    // A walk at 1-2 m/s reaches the 3 m corner within 4 s and has to turn on the spot
+    // while its plan heads back: it lags the plan more than on the straight.
+    let cost = |terrain: &str| {
+        let s = TuneSettings {
+            duration: 6.0,
+            ..settings(Form::Walk, 5, terrain)
+        };
+        evaluate(&TunedParams::default(), &s, 5).unwrap()
+    };
+    let (flat, back) = (cost("flat"), cost("turnback"));
+    assert!(back.xy > flat.xy, "turnback {back:?} vs flat {flat:?}");
+}
+
+#[test]
+fn the_hill_ground_slopes_across_the_path() {
+    // The path runs along +X at the start's y; the hills rise beside it, so the
+    // ground under the path climbs and tilts sideways.
+    let (scene, [x0, y]) = terrain_scene("hill").unwrap();
+    assert_eq!(scene.height_at(x0, y), 0.0);
+    let (left, right) = (scene.height_at(6.0, y + 0.5), scene.height_at(6.0, y - 0.5));
+    assert!(
+        left > right + 0.1,
+        "across the first flank: {left} vs {right}"
+    );
+    let (left, right) = (
+        scene.height_at(13.0, y + 0.5),
+        scene.height_at(13.0, y - 0.5),
+    );
+    assert!(
+        right > left + 0.1,
+        "across the second flank: {left} vs {right}"
     );
 }

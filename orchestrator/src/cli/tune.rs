@@ -47,7 +47,11 @@ pub struct TuneArgs {
     start_like: Option<String>,
     /// Ground of the rollouts, comma-separated, assigned round-robin: flat, slope,
     /// rough, stairs (the strips of `plamo eval locomotion`), ceiling (flat under a
-    /// 0.6 m ceiling, for the crawl), arc (4 m turns on flat ground).
+    /// 0.6 m ceiling, for the crawl), hill (a straight path across two hills' flanks),
+    /// arc (4 m turns on flat ground), drop (a walk that
+    /// drops to the form at 3 s, on flat ground), rise (the form, standing up at half
+    /// the rollout, on flat ground), turnback (a stop after 3 m and back at 2.6 rad, on
+    /// flat ground).
     #[arg(long, default_value = "flat")]
     terrains: String,
     /// Physics parameter file: a TOML table of physics settings for every rollout
