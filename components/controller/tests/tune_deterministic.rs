@@ -4,7 +4,7 @@
 //! command that reproduces `params/gait.toml`.)
 
 use plamo_controller::{
-    ControllerSettings, CrawlParams, Form, GaitParams, TuneSettings, TunedParams, evaluate,
+    ControllerSettings, Cost, CrawlParams, Form, GaitParams, TuneSettings, TunedParams, evaluate,
     start_like, terrain_scene, tune,
 };
 use plamo_physics::BackendKind;
@@ -141,17 +141,20 @@ fn the_fall_cost_weighs_each_fall_as_set() {
     );
 }
 
+/// The built-in parameters' cost for `form` on one ground, `duration` s per rollout.
+fn cost_on(form: Form, seed: u64, duration: f64, terrain: &str) -> Cost {
+    let s = TuneSettings {
+        duration,
+        ..settings(form, seed, terrain)
+    };
+    evaluate(&TunedParams::default(), &s, seed).unwrap()
+}
+
 #[test]
 fn the_form_changing_grounds_change_the_rollouts() {
     // The crawl on flat ground from the start, after a 3 s walk (`drop`), and standing
     // up at half the rollout (`rise`): same seed, same speeds, three different plans.
-    let cost = |terrain: &str| {
-        let s = TuneSettings {
-            duration: 4.0,
-            ..settings(Form::Crawl, 3, terrain)
-        };
-        evaluate(&TunedParams::default(), &s, 3).unwrap()
-    };
+    let cost = |terrain| cost_on(Form::Crawl, 3, 4.0, terrain);
     let (flat, drop, rise) = (cost("flat"), cost("drop"), cost("rise"));
     // Walking until 3 s keeps the head ~1 m above the crawl's plan in the flat rollout;
     // the drop's head is near its own plan until then.
@@ -164,13 +167,7 @@ fn the_form_changing_grounds_change_the_rollouts() {
 fn the_turnback_ground_stops_and_turns_the_plan_back() {
     // A walk at 1-2 m/s reaches the 3 m corner within 4 s and has to turn on the spot
     // while its plan heads back: it lags the plan more than on the straight.
-    let cost = |terrain: &str| {
-        let s = TuneSettings {
-            duration: 6.0,
-            ..settings(Form::Walk, 5, terrain)
-        };
-        evaluate(&TunedParams::default(), &s, 5).unwrap()
-    };
+    let cost = |terrain| cost_on(Form::Walk, 5, 6.0, terrain);
     let (flat, back) = (cost("flat"), cost("turnback"));
     assert!(back.xy > flat.xy, "turnback {back:?} vs flat {flat:?}");
 }
