@@ -309,10 +309,10 @@ pub struct TuneSettings {
     /// alternately; its cost counts the heading too), `drop` (flat: a walk at the
     /// rollout's speed that drops to the form's head height at [`DROP_AT`]), `rise`
     /// (flat: the form from the start, standing up at half the rollout), `turnback`
-    /// (flat: a stop after 3 m and back at [`TURN_BACK`], left and right alternately) or the name of
+    /// (flat: a stop after 3 m and back at [`TURN_BACK`], left and right alternately),
     /// `hill` (a straight path across two hills' flanks) or a built-in terrain strip
-    /// without its `terrain-` prefix (`slope`, `rough`,
-    /// `stairs`; the strips of `plamo eval locomotion`).
+    /// without its `terrain-` prefix (`slope`, `rough`, `stairs`; the strips of `plamo
+    /// eval locomotion`).
     pub terrains: Vec<String>,
     /// Cost of a fall per rollout \[m-equivalent\]; `None` takes the form's own
     /// (3 for the run and the crawl, 1 for the walk and the crouch). The Table 2
@@ -382,9 +382,7 @@ pub fn terrain_scene(name: &str) -> Result<(plamo_scenes::Scene, [f64; 2])> {
     let scene = plamo_scenes::builtin(&format!("terrain-{name}")).map_err(|e| {
         ControllerError::InvalidSettings {
             field: "terrains",
-            reason: format!(
-                "unknown terrain `{name}` (flat, slope, rough, stairs, ceiling, hill, arc, drop, rise, turnback): {e}"
-            ),
+            reason: format!("unknown terrain `{name}` ({GROUNDS}): {e}"),
         }
     })?;
     Ok((scene, [5.0, 3.0]))
@@ -416,6 +414,9 @@ region = { kind = "circle", center = [2.0, 5.0], radius = 0.75 }
 name = "goal"
 region = { kind = "circle", center = [30.0, 5.0], radius = 0.75 }
 "#;
+
+/// Every ground name [`TuneSettings::terrains`] takes, for error messages.
+const GROUNDS: &str = "flat, slope, rough, stairs, ceiling, hill, arc, drop, rise, turnback";
 
 /// Evaluates `params` on the scenarios drawn for `seed` (same seed, same scenarios).
 pub fn evaluate(params: &TunedParams, s: &TuneSettings, seed: u64) -> Result<Cost> {
@@ -474,8 +475,7 @@ fn grounds(s: &TuneSettings) -> Result<Vec<Ground>> {
     if grounds.is_empty() {
         return Err(ControllerError::InvalidSettings {
             field: "terrains",
-            reason: "no terrain to tune on (flat, slope, rough, stairs, ceiling, hill, arc, drop, rise, turnback)"
-                .into(),
+            reason: format!("no terrain to tune on ({GROUNDS})"),
         });
     }
     Ok(grounds)
