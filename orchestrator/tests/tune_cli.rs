@@ -48,6 +48,9 @@ fn tuning_the_crawl_writes_a_crawl_file_that_loads() {
     );
     assert!(text.contains("--physics-params"), "{text}");
     assert!(text.contains("--fall-cost 5"), "{text}");
+    // The run's end replaces any checkpoint with the final file and leaves no part.
+    assert!(text.contains("\n# Final cost "), "{text}");
+    assert!(!out.with_extension("part").exists());
     plamo_controller::CrawlParams::load(&out).unwrap();
     // Not a terminal: progress comes as one log line per generation.
     let log = String::from_utf8_lossy(&o.stderr);

@@ -361,6 +361,10 @@ pub struct Generation {
     pub index: u32,
     /// Best cost so far.
     pub best: Cost,
+    /// The parameters of `best`.
+    pub best_params: TunedParams,
+    /// Whether this generation found `best` (a caller that checkpoints writes then).
+    pub improved: bool,
     /// Step size now.
     pub sigma: f64,
 }
@@ -697,14 +701,15 @@ pub fn tune(
             }
         }
         es.tell(&samples, &costs);
-        if let Some((p, c)) = gen_best
-            && c.total < best.1.total
-        {
-            best = (p, c);
+        let improved = gen_best.is_some_and(|(_, c)| c.total < best.1.total);
+        if let (true, Some(b)) = (improved, gen_best) {
+            best = b;
         }
         on_generation(&Generation {
             index: g,
             best: best.1,
+            best_params: best.0,
+            improved,
             sigma: es.sigma,
         });
     }

@@ -192,3 +192,31 @@ fn the_hill_ground_slopes_across_the_path() {
         "across the second flank: {left} vs {right}"
     );
 }
+
+#[test]
+fn each_generation_reports_the_best_so_far_for_a_checkpoint() {
+    let mut s = settings(Form::Walk, 5, "flat");
+    s.generations = 4;
+    let mut seen: Vec<plamo_controller::Generation> = Vec::new();
+    let (best, cost) = tune(&TunedParams::default(), &s, |g| seen.push(g.clone())).unwrap();
+    assert_eq!(seen.len(), 4);
+    for (i, g) in seen.iter().enumerate() {
+        assert_eq!(g.index as usize, i + 1);
+        if let Some(prev) = i.checked_sub(1).map(|j| &seen[j]) {
+            assert!(g.best.total <= prev.best.total, "best got worse: {seen:?}");
+            // A generation that finds nothing better reports the same best, so a
+            // checkpoint written only on `improved` is always the best so far.
+            if !g.improved {
+                assert_eq!(g.best_params, prev.best_params);
+                assert_eq!(g.best.total.to_bits(), prev.best.total.to_bits());
+            } else {
+                assert!(g.best.total < prev.best.total);
+            }
+        }
+    }
+    // The last checkpoint is what the run returns (its cost is re-scored on the base
+    // scenarios, which are the search's own: the same number).
+    let last = seen.last().unwrap();
+    assert_eq!(last.best_params, best);
+    assert_eq!(last.best.total.to_bits(), cost.total.to_bits());
+}
