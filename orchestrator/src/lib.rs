@@ -12,4 +12,5 @@ pub mod progress;
 pub mod record;
 pub mod seeds;
 pub mod spec;
+pub mod tune_tours;
 pub mod viz;

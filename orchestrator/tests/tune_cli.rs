@@ -122,3 +122,50 @@ fn a_search_in_one_engine_starts_from_that_engines_gait() {
         GaitParams::built_in(BackendKind::Mujoco).crouch
     );
 }
+
+/// `--tours`: candidates priced by whole random tours; the header names the tours, so
+/// the command reproduces the file.
+#[cfg(feature = "mujoco")]
+#[test]
+fn tuning_on_tours_writes_a_file_that_names_its_tours() {
+    let dir = support::out_dir("tune", "tours");
+    let out = dir.join("crawl.toml");
+    let o = plamo(&[
+        "--form",
+        "crawl",
+        "--budget",
+        "0",
+        "--tours",
+        "2",
+        "--physics",
+        "mujoco",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        text.contains("--physics mujoco --tours 2 --tour-seed 100000 --out"),
+        "{text}"
+    );
+    assert!(text.contains("tours with a fall"), "{text}");
+    assert!(!text.contains("--terrains"), "{text}");
+    plamo_controller::CrawlParams::load(&out).unwrap();
+}
+
+#[test]
+fn tours_and_rollout_settings_are_refused_together() {
+    for (flag, value) in [
+        ("--terrains", "hill"),
+        ("--rollouts", "8"),
+        ("--duration", "12"),
+    ] {
+        let o = plamo(&["--form", "crawl", "--tours", "2", flag, value]);
+        assert!(!o.status.success());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains("--tours") && err.contains(flag) && err.contains("cannot be used"),
+            "{err}"
+        );
+    }
+}

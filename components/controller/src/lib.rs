@@ -44,5 +44,5 @@ pub use rollout::{
 pub use settings::{ControllerSettings, GRAVITY};
 pub use tune::{
     Cost, Form, Generation, Rng, Sample, SepCmaEs, TuneSettings, TunedParams, evaluate, start_like,
-    terrain_scene, to_toml, tune,
+    terrain_scene, to_toml, tune, tune_with,
 };

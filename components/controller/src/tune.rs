@@ -51,6 +51,16 @@ impl std::str::FromStr for Form {
 }
 
 impl Form {
+    /// The form's verb in an instruction ("crouch-walk to the bench").
+    pub fn verb(self) -> &'static str {
+        match self {
+            Form::Walk => "walk",
+            Form::Run => "run",
+            Form::Crouch => "crouch-walk",
+            Form::Crawl => "crawl",
+        }
+    }
+
     /// Requested head height \[m\] and speed range \[m/s\] the form is tuned over.
     pub fn task(self) -> (f64, [f64; 2]) {
         match self {
@@ -65,7 +75,7 @@ impl Form {
 
     /// Weight of the head Z error in the cost \[-\]: the crouch's point is its low
     /// head (an earlier search kept the head 0.25 m high to avoid falls).
-    fn z_weight(self) -> f64 {
+    pub fn z_weight(self) -> f64 {
         match self {
             Form::Crouch => 3.0,
             Form::Walk | Form::Run | Form::Crawl => 1.0,
@@ -77,7 +87,7 @@ impl Form {
     /// at 1 m a search trades falls for lag; a fall ends a run in a route.
     /// The crawl's too: a crawler that falls must get up and down again, which costs
     /// seconds.
-    fn fall_cost(self) -> f64 {
+    pub fn fall_cost(self) -> f64 {
         match self {
             Form::Run | Form::Crawl => 3.0,
             Form::Walk | Form::Crouch => 1.0,
@@ -662,15 +672,31 @@ pub fn start_like(base: &TunedParams, form: Form, like: Form) -> Result<TunedPar
 pub fn tune(
     base: &TunedParams,
     s: &TuneSettings,
+    on_generation: impl FnMut(&Generation),
+) -> Result<(TunedParams, Cost)> {
+    let grounds = grounds(s)?;
+    tune_with(
+        base,
+        s,
+        |p| evaluate_on(&grounds, p, s, s.seed),
+        on_generation,
+    )
+}
+
+/// [`tune`] on another objective: `cost` prices a candidate (e.g. by whole tours
+/// through the planner and orchestrator, which this crate does not know). The search
+/// (form, generations, seed, step size) is `s`'s; its rollout fields are `cost`'s
+/// business. `cost` must be deterministic for the search to be.
+pub fn tune_with(
+    base: &TunedParams,
+    s: &TuneSettings,
+    cost: impl Fn(&TunedParams) -> Result<Cost> + Sync,
     mut on_generation: impl FnMut(&Generation),
 ) -> Result<(TunedParams, Cost)> {
     let mut rng = Rng::new(s.seed);
     let mut es = SepCmaEs::new(encode(base, s.form), s.sigma0, 0);
-    let grounds = grounds(s)?;
-    let mut best = (*base, evaluate_on(&grounds, base, s, s.seed)?);
+    let mut best = (*base, cost(base)?);
     for g in 1..=s.generations {
-        // One scenario set for the whole run: a deterministic objective.
-        let scenario_seed = s.seed;
         let samples = es.ask(&mut rng);
         // The whole generation at once: a candidate's rollouts alone leave most cores
         // idle behind its slowest one (a rapier rollout). Collected in order, so the
@@ -680,7 +706,7 @@ pub fn tune(
             .map(|smp| {
                 let p = decode(base, s.form, &smp.x);
                 let c = match p.validate() {
-                    Ok(()) => evaluate_on(&grounds, &p, s, scenario_seed)?,
+                    Ok(()) => cost(&p)?,
                     Err(_) => Cost {
                         total: 1e3,
                         ..Default::default()
@@ -713,9 +739,9 @@ pub fn tune(
             sigma: es.sigma,
         });
     }
-    // Final score on the base scenarios.
-    let c = evaluate_on(&grounds, &best.0, s, s.seed)?;
-    Ok((best.0, c))
+    // The objective is deterministic: the best's cost is its final score (pricing it
+    // again, a whole generation's work with tours, would give the same number).
+    Ok(best)
 }
 
 /// The parameters as a TOML file with a header naming the command that made them.
