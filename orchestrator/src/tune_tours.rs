@@ -79,6 +79,11 @@ impl TourObjective {
         })
     }
 
+    /// The scene seed after the last tour's: where a held-out set of tours starts.
+    pub fn next_seed(&self) -> u64 {
+        self.tours.last().map_or(0, |(_, s, _)| s + 1)
+    }
+
     /// The tours' instructions, in order, with their scene seeds.
     pub fn tours(&self) -> impl Iterator<Item = (u64, &str)> {
         self.tours.iter().map(|(_, s, t)| (*s, t.as_str()))

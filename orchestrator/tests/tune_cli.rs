@@ -151,6 +151,44 @@ fn tuning_on_tours_writes_a_file_that_names_its_tours() {
     assert!(text.contains("tours with a fall"), "{text}");
     assert!(!text.contains("--terrains"), "{text}");
     plamo_controller::CrawlParams::load(&out).unwrap();
+
+    // A search says how its result does on the next tours, which it never saw; one
+    // that found nothing better than its start has nothing to hold out.
+    let o = plamo(&[
+        "--form",
+        "crawl",
+        "--budget",
+        "1",
+        "--tours",
+        "2",
+        "--physics",
+        "mujoco",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    let tuned = plamo_controller::CrawlParams::load(&out).unwrap();
+    if tuned == plamo_controller::CrawlParams::default() {
+        assert!(!text.contains("Held out"), "{text}");
+    } else {
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("# Held out, the next 2 tours (scene seeds "))
+            .unwrap_or_else(|| panic!("no held-out line: {text}"));
+        assert!(
+            line.contains("start cost") && line.contains("this file"),
+            "{line}"
+        );
+        // The search's own tours are seeds 100000.., the held-out ones come after.
+        let first: u64 = line
+            .split("scene seeds ")
+            .nth(1)
+            .and_then(|r| r.split("..").next())
+            .and_then(|n| n.parse().ok())
+            .unwrap();
+        assert!(first > 100_000, "{line}");
+    }
 }
 
 #[test]
