@@ -59,7 +59,8 @@ pub struct TuneArgs {
     /// Price candidates by whole random tours instead of rollouts: the first N tours
     /// of `plamo eval random` from `--tour-seed` with a leg in the form, each through
     /// planner and orchestrator in every `--physics` engine; the cost is the fall cost
-    /// per tour not finished + head XY error + Z error. 0: rollouts.
+    /// per tour not finished + head XY error + Z error; the start and the result are
+    /// then priced on the next N tours too, which the search never saw. 0: rollouts.
     #[arg(long, default_value_t = 0, conflicts_with_all = ["rollouts", "duration", "terrains"])]
     tours: usize,
     /// First scene seed of the `--tours` (default far past the seeds RESULTS.md
