@@ -344,7 +344,7 @@ const ARC_HEADING_COST: f64 = 2.0;
 
 /// Cost per unit of mean residual force (fraction of m*g) \[m-equivalent\]: 0.1 m*g
 /// weighs as 0.2 m of XY error, so the search prefers a gait that propels itself.
-const RESIDUAL_COST: f64 = 2.0;
+pub const RESIDUAL_COST: f64 = 2.0;
 
 /// Cost of one parameter set: mean over rollouts of
 /// `xy_err + w_z * z_err + RESIDUAL_COST * residual_force_mean + w_fall * falls`

@@ -73,6 +73,8 @@ pub struct Episode {
     pub xy_err: f64,
     /// Mean absolute head Z error \[m\].
     pub z_err: f64,
+    /// Mean residual root force over every recorded step, fraction of m*g \[-\].
+    pub residual_force: f64,
     /// Control steps with some body touching a wall or ceiling.
     pub static_contact_steps: u32,
     /// Times some body started touching a moving obstacle.
@@ -341,11 +343,13 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
         ep.time_s += r.time_s;
         ep.xy_err += r.metrics.xy_err_mean * r.metrics.steps as f64;
         ep.z_err += r.metrics.z_err_mean * r.metrics.steps as f64;
+        ep.residual_force += r.metrics.residual_force_mean * r.metrics.steps as f64;
         steps += r.metrics.steps;
     }
     if steps > 0 {
         ep.xy_err /= steps as f64;
         ep.z_err /= steps as f64;
+        ep.residual_force /= steps as f64;
     }
     Ok(ep)
 }
