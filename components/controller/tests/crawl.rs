@@ -765,3 +765,31 @@ macro_rules! crawl_suite {
 crawl_suite!(rapier, BackendKind::Rapier);
 #[cfg(feature = "mujoco")]
 crawl_suite!(mujoco, BackendKind::Mujoco);
+
+/// The crawl tuned on the tours (`params/crawl-tours.toml`, session 27) ships beside the
+/// built-in one: it loads, and on flat ground it crawls without falls and lags its plan
+/// more than the built-in crawl (the trade its header states: slower, fewer falls on
+/// the tours).
+#[cfg(feature = "mujoco")]
+#[test]
+fn the_tours_tuned_crawl_ships_beside_it_and_lags_more() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("params/crawl-tours.toml");
+    let tours = CrawlParams::load(&path).unwrap();
+    assert_ne!(tours, CrawlParams::default());
+    let scene = flat_scene(10.0);
+    let m = crawl_with(BackendKind::Mujoco, &scene, &line(), 10.0, tours);
+    let built_in = crawl_with(
+        BackendKind::Mujoco,
+        &scene,
+        &line(),
+        10.0,
+        CrawlParams::default(),
+    );
+    assert_eq!(m.falls, 0, "{m:#?}");
+    assert!(
+        m.xy_err_mean > built_in.xy_err_mean,
+        "tours-tuned {} m, built-in {} m",
+        m.xy_err_mean,
+        built_in.xy_err_mean
+    );
+}
