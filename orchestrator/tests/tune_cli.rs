@@ -123,6 +123,23 @@ fn a_search_in_one_engine_starts_from_that_engines_gait() {
     );
 }
 
+/// A crawl search of `budget` generations in MuJoCo priced by two tours, into `out`.
+#[cfg(feature = "mujoco")]
+fn tune_on_two_tours(budget: &str, out: &std::path::Path) -> Output {
+    plamo(&[
+        "--form",
+        "crawl",
+        "--budget",
+        budget,
+        "--tours",
+        "2",
+        "--physics",
+        "mujoco",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
 /// `--tours`: candidates priced by whole random tours; the header names the tours, so
 /// the command reproduces the file.
 #[cfg(feature = "mujoco")]
@@ -130,18 +147,7 @@ fn a_search_in_one_engine_starts_from_that_engines_gait() {
 fn tuning_on_tours_writes_a_file_that_names_its_tours() {
     let dir = support::out_dir("tune", "tours");
     let out = dir.join("crawl.toml");
-    let o = plamo(&[
-        "--form",
-        "crawl",
-        "--budget",
-        "0",
-        "--tours",
-        "2",
-        "--physics",
-        "mujoco",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = tune_on_two_tours("0", &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(&out).unwrap();
     assert!(
@@ -154,18 +160,7 @@ fn tuning_on_tours_writes_a_file_that_names_its_tours() {
 
     // A search says how its result does on the next tours, which it never saw; one
     // that found nothing better than its start has nothing to hold out.
-    let o = plamo(&[
-        "--form",
-        "crawl",
-        "--budget",
-        "1",
-        "--tours",
-        "2",
-        "--physics",
-        "mujoco",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = tune_on_two_tours("1", &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(&out).unwrap();
     let tuned = plamo_controller::CrawlParams::load(&out).unwrap();

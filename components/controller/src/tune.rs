@@ -51,16 +51,6 @@ impl std::str::FromStr for Form {
 }
 
 impl Form {
-    /// The form's verb in an instruction ("crouch-walk to the bench").
-    pub fn verb(self) -> &'static str {
-        match self {
-            Form::Walk => "walk",
-            Form::Run => "run",
-            Form::Crouch => "crouch-walk",
-            Form::Crawl => "crawl",
-        }
-    }
-
     /// Requested head height \[m\] and speed range \[m/s\] the form is tuned over.
     pub fn task(self) -> (f64, [f64; 2]) {
         match self {
