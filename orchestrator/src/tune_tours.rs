@@ -5,7 +5,7 @@
 //! never falls where a tour's crawl leg, after a get-down, around a corner, along a
 //! stair's side, falls in one tour of five (RESULTS.md, "Crawl").
 
-use plamo_controller::{ControllerError, Cost, Form, RESIDUAL_COST, TunedParams};
+use plamo_controller::{ControllerError, Cost, Form, RESIDUAL_COST, TrackingGuard, TunedParams};
 use plamo_physics::{BackendKind, PhysicsSettings};
 use plamo_planner::{Locomotion, PlannerSettings};
 use plamo_scenes::Scene;
@@ -31,6 +31,7 @@ pub struct TourObjective {
     physics: PhysicsSettings,
     fall_cost: f64,
     tours: Vec<(Scene, u64, String)>,
+    guard: Option<TrackingGuard>,
 }
 
 impl TourObjective {
@@ -75,7 +76,19 @@ impl TourObjective {
             physics,
             fall_cost: fall_cost.unwrap_or(form.fall_cost()),
             tours,
+            guard: None,
         })
+    }
+
+    /// The same tours, with `guard`'s price for lost tracking added to every cost.
+    pub fn with_guard(mut self, guard: TrackingGuard) -> Self {
+        self.guard = Some(guard);
+        self
+    }
+
+    /// The guard added by [`Self::with_guard`], if any.
+    pub fn guard(&self) -> Option<&TrackingGuard> {
+        self.guard.as_ref()
     }
 
     /// The scene seed after the last tour's: where a held-out set of tours starts.
@@ -93,7 +106,8 @@ impl TourObjective {
     /// XY error + the form's weight times its mean Z error + [`RESIDUAL_COST`] times
     /// the mean residual force (fraction of m*g), as a rollout's cost has it: a first
     /// search without it bought its crawl's fewer falls with 0.17 m*g of residual
-    /// force instead of 0.12. `falls` is the share of tours with a fall.
+    /// force instead of 0.12. `falls` is the share of tours with a fall. With a
+    /// [`TrackingGuard`] its price is added and `tracking` is its XY error.
     pub fn cost(&self, params: &TunedParams) -> plamo_controller::Result<Cost> {
         // Only the searched file moves; the other stays each engine's built-in one (a
         // crawl search in rapier keeps `gait-rapier.toml` under its tours).
@@ -148,6 +162,11 @@ impl TourObjective {
         c.xy /= k;
         c.z /= k;
         c.residual /= k;
+        if let Some(g) = &self.guard {
+            let (xy, price) = g.price(params)?;
+            c.total += price;
+            c.tracking = xy;
+        }
         Ok(c)
     }
 }

@@ -186,6 +186,71 @@ fn tuning_on_tours_writes_a_file_that_names_its_tours() {
     }
 }
 
+/// `--keep-tracking`: the search on tours also prices flat rollouts against its
+/// start; the header says how far the file's are from the start's.
+#[cfg(feature = "mujoco")]
+#[test]
+fn a_search_on_tours_can_keep_the_starts_tracking() {
+    let dir = support::out_dir("tune", "keep-tracking");
+    let out = dir.join("crawl.toml");
+    let o = plamo(&[
+        "--form",
+        "crawl",
+        "--budget",
+        "0",
+        "--tours",
+        "1",
+        "--physics",
+        "mujoco",
+        "--keep-tracking",
+        "0.05",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        text.contains("--tours 1 --tour-seed 100000 --keep-tracking 0.05"),
+        "{text}"
+    );
+    // The start is the file: its flat XY is the start's.
+    let line = text
+        .lines()
+        .find(|l| l.contains("Flat rollouts' XY"))
+        .unwrap_or_else(|| panic!("no tracking in the header: {text}"));
+    let xy: Vec<&str> = line
+        .split("XY ")
+        .skip(2)
+        .chain(line.split("(start ").skip(1))
+        .map(|r| r.split(' ').next().unwrap())
+        .collect();
+    assert_eq!(xy.len(), 2, "{line}");
+    assert_eq!(xy[0], xy[1], "{line}");
+    assert!(xy[0].parse::<f64>().unwrap() > 0.0, "{line}");
+}
+
+#[test]
+fn keep_tracking_needs_tours_and_a_length() {
+    for (args, says) in [
+        (
+            &["--form", "crawl", "--keep-tracking", "0.05"][..],
+            "--tours",
+        ),
+        (
+            &["--form", "crawl", "--tours", "1", "--keep-tracking", "-1"][..],
+            ">= 0",
+        ),
+    ] {
+        let o = plamo(args);
+        assert!(!o.status.success());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains("--keep-tracking") && err.contains(says),
+            "{err}"
+        );
+    }
+}
+
 #[test]
 fn tours_and_rollout_settings_are_refused_together() {
     for (flag, value) in [

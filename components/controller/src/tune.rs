@@ -352,6 +352,8 @@ pub struct Cost {
     pub z: f64,
     /// Mean residual force, fraction of m*g.
     pub residual: f64,
+    /// Mean head XY error of a [`TrackingGuard`]'s flat rollouts \[m\]; 0 without one.
+    pub tracking: f64,
 }
 
 /// Progress after one generation.
@@ -590,6 +592,7 @@ fn evaluate_on(
                 xy: m.xy_err_mean,
                 z: m.z_err_mean,
                 residual: m.residual_force_mean,
+                tracking: 0.0,
             })
         })
         .collect();
@@ -612,6 +615,7 @@ fn evaluate_on(
         xy: sum.xy / k,
         z: sum.z / k,
         residual: sum.residual / k,
+        tracking: 0.0,
     })
 }
 
@@ -654,6 +658,72 @@ pub fn start_like(base: &TunedParams, form: Form, like: Form) -> Result<TunedPar
         *field(&mut p, form, name) = v;
     }
     Ok(p)
+}
+
+/// Cost per metre of flat-ground XY error a candidate loses against the search's start
+/// beyond a [`TrackingGuard`]'s margin \[m-equivalent per m\]: 0.1 m more lag costs
+/// as much as one tour in ten failing at a fall cost of 10.
+pub const TRACKING_COST: f64 = 10.0;
+
+/// Rollouts per engine of a [`TrackingGuard`]: a straight path and a 4 m turn at two
+/// speeds each, stratified over the form's range.
+const TRACKING_ROLLOUTS: usize = 4;
+
+/// Simulated seconds of a [`TrackingGuard`]'s rollouts \[s\].
+const TRACKING_DURATION: f64 = 12.0;
+
+/// Keeps a search priced on something else (whole tours) from buying it with how
+/// closely the form follows its plan: a crawl tuned on the tours alone fell half as
+/// often and lagged 0.3 m behind a 0.5 m/s plan on flat ground instead of 0.17-0.2 m
+/// (RESULTS.md, "Crawl", session 28). A candidate pays [`TRACKING_COST`] per metre its
+/// mean XY error on flat rollouts (straight and `arc`, from standing, the form's
+/// speeds) exceeds the start's by more than `margin`.
+pub struct TrackingGuard {
+    settings: TuneSettings,
+    grounds: Vec<Ground>,
+    start_xy: f64,
+    margin: f64,
+}
+
+impl TrackingGuard {
+    /// The guard for a search from `base` in the engines, physics and controller
+    /// settings of `s`; the rollouts' speeds are drawn once from `s.seed`.
+    pub fn new(base: &TunedParams, s: &TuneSettings, margin: f64) -> Result<Self> {
+        if !(margin.is_finite() && margin >= 0.0) {
+            return Err(ControllerError::InvalidSettings {
+                field: "keep_tracking",
+                reason: format!("the margin must be a finite number >= 0 m, got {margin}"),
+            });
+        }
+        let settings = TuneSettings {
+            rollouts: TRACKING_ROLLOUTS,
+            duration: TRACKING_DURATION,
+            terrains: vec!["flat".into(), "arc".into()],
+            fall_cost: None,
+            ..s.clone()
+        };
+        let grounds = grounds(&settings)?;
+        let start_xy = evaluate_on(&grounds, base, &settings, settings.seed)?.xy;
+        Ok(Self {
+            settings,
+            grounds,
+            start_xy,
+            margin,
+        })
+    }
+
+    /// The start's mean XY error on the guard's rollouts \[m\].
+    pub fn start_xy(&self) -> f64 {
+        self.start_xy
+    }
+
+    /// `params`' mean XY error on the guard's rollouts \[m\] and what it pays for it
+    /// \[m-equivalent\].
+    pub fn price(&self, params: &TunedParams) -> Result<(f64, f64)> {
+        let xy = evaluate_on(&self.grounds, params, &self.settings, self.settings.seed)?.xy;
+        let over = (xy - self.start_xy - self.margin).max(0.0);
+        Ok((xy, TRACKING_COST * over))
+    }
 }
 
 /// Runs CMA-ES from `base`; returns the best parameters found and their cost. The

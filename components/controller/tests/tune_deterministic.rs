@@ -220,3 +220,28 @@ fn each_generation_reports_the_best_so_far_for_a_checkpoint() {
     assert_eq!(last.best_params, best);
     assert_eq!(last.best.total.to_bits(), cost.total.to_bits());
 }
+
+/// The tracking guard charges a candidate for lag it adds over the start, and nothing
+/// for the start itself: a crawl capped at a third of its top speed trails a
+/// 0.4-1.0 m/s plan further and pays for it.
+#[test]
+fn the_tracking_guard_prices_lost_tracking_and_not_the_start() {
+    use plamo_controller::{TRACKING_COST, TrackingGuard};
+    let base = TunedParams::default();
+    let s = settings(Form::Crawl, 3, "flat");
+    let guard = TrackingGuard::new(&base, &s, 0.05).unwrap();
+    let (xy, price) = guard.price(&base).unwrap();
+    assert_eq!(xy.to_bits(), guard.start_xy().to_bits());
+    assert_eq!(price, 0.0);
+    let mut slow = base;
+    slow.crawl.max_speed = base.crawl.max_speed / 3.0;
+    let (slow_xy, slow_price) = guard.price(&slow).unwrap();
+    assert!(slow_xy > xy + 0.05, "{slow_xy} vs {xy}");
+    assert_eq!(
+        slow_price.to_bits(),
+        (TRACKING_COST * (slow_xy - xy - 0.05)).to_bits()
+    );
+    // A margin that is not a length is refused by name.
+    let err = TrackingGuard::new(&base, &s, f64::NAN).err().unwrap();
+    assert!(err.to_string().contains("keep_tracking"), "{err}");
+}
