@@ -123,21 +123,29 @@ fn a_search_in_one_engine_starts_from_that_engines_gait() {
     );
 }
 
-/// A crawl search of `budget` generations in MuJoCo priced by two tours, into `out`.
+/// A crawl search of `budget` generations in MuJoCo priced by `tours` tours, with
+/// `more` arguments, into `out`.
 #[cfg(feature = "mujoco")]
-fn tune_on_two_tours(budget: &str, out: &std::path::Path) -> Output {
-    plamo(&[
+fn tune_on_tours(budget: &str, tours: &str, more: &[&str], out: &std::path::Path) -> Output {
+    let mut args = vec![
         "--form",
         "crawl",
         "--budget",
         budget,
         "--tours",
-        "2",
+        tours,
         "--physics",
         "mujoco",
-        "--out",
-        out.to_str().unwrap(),
-    ])
+    ];
+    args.extend_from_slice(more);
+    args.extend_from_slice(&["--out", out.to_str().unwrap()]);
+    plamo(&args)
+}
+
+/// A crawl search of `budget` generations in MuJoCo priced by two tours, into `out`.
+#[cfg(feature = "mujoco")]
+fn tune_on_two_tours(budget: &str, out: &std::path::Path) -> Output {
+    tune_on_tours(budget, "2", &[], out)
 }
 
 /// `--tours`: candidates priced by whole random tours; the header names the tours, so
@@ -193,20 +201,7 @@ fn tuning_on_tours_writes_a_file_that_names_its_tours() {
 fn a_search_on_tours_can_keep_the_starts_tracking() {
     let dir = support::out_dir("tune", "keep-tracking");
     let out = dir.join("crawl.toml");
-    let o = plamo(&[
-        "--form",
-        "crawl",
-        "--budget",
-        "0",
-        "--tours",
-        "1",
-        "--physics",
-        "mujoco",
-        "--keep-tracking",
-        "0.05",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = tune_on_tours("0", "1", &["--keep-tracking", "0.05"], &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(&out).unwrap();
     assert!(

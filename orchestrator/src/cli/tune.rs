@@ -94,16 +94,10 @@ pub fn run(args: TuneArgs) -> anyhow::Result<ExitCode> {
     {
         anyhow::bail!("--fall-cost must be a finite number >= 0 (m-equivalent per fall), got {c}");
     }
-    if let Some(m) = args.keep_tracking {
-        anyhow::ensure!(
-            args.tours > 0,
-            "--keep-tracking guards a search on tours: give --tours N too"
-        );
-        anyhow::ensure!(
-            m.is_finite() && m >= 0.0,
-            "--keep-tracking must be a finite number >= 0 (metres of XY error), got {m}"
-        );
-    }
+    anyhow::ensure!(
+        args.keep_tracking.is_none() || args.tours > 0,
+        "--keep-tracking guards a search on tours: give --tours N too"
+    );
     let backends = args
         .physics
         .split(',')
@@ -200,6 +194,15 @@ pub fn run(args: TuneArgs) -> anyhow::Result<ExitCode> {
             .unwrap_or_default(),
         out.display(),
     );
+    // The guard checks its margin and prices the start before the tours are drawn,
+    // so a bad `--keep-tracking` is refused at once.
+    let guard = args
+        .keep_tracking
+        .map(|margin| {
+            TrackingGuard::new(&base, &settings, margin)
+                .map_err(|e| anyhow::anyhow!("--keep-tracking: {e}"))
+        })
+        .transpose()?;
     let tours = if args.tours > 0 {
         let t = TourObjective::new(
             form,
@@ -215,12 +218,12 @@ pub fn run(args: TuneArgs) -> anyhow::Result<ExitCode> {
             args.tour_seed,
             t.tours().last().map_or(args.tour_seed, |(s, _)| s)
         );
-        Some(match args.keep_tracking {
-            Some(margin) => {
-                let g = TrackingGuard::new(&base, &settings, margin)?;
+        Some(match guard {
+            Some(g) => {
                 say!(
-                    "keeping the start's tracking: flat rollouts' XY {:.3} m, {margin} m allowed",
-                    g.start_xy()
+                    "keeping the start's tracking: flat rollouts' XY {:.3} m, {} m allowed",
+                    g.start_xy(),
+                    args.keep_tracking.unwrap_or_default()
                 );
                 t.with_guard(g)
             }
