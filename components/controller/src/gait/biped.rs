@@ -600,7 +600,14 @@ impl BipedGait {
             -(g.rot_gain * (pitch - pitch_des) + g.rot_damping * wy),
             g.rot_gain * 0.2 * heading_err - g.rot_damping * wz,
         ];
-        self.last_wrench = residual_wrench(&self.settings, obs.heading, force, torque, out);
+        self.last_wrench = residual_wrench(
+            &self.settings,
+            self.settings.residual_torque_cap,
+            obs.heading,
+            force,
+            torque,
+            out,
+        );
     }
 
     pub(crate) fn reset(&mut self) {

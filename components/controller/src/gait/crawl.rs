@@ -420,6 +420,15 @@ pub struct CrawlParams {
     /// leg and fell within a second (RESULTS "Crawl", session 24). Off: the biped.
     #[serde(default)]
     pub reset_kneeling_crawls: bool,
+    /// Residual torque for roll alone beyond `residual_torque_cap` \[N m\], given as
+    /// the body leans past `roll_first_from` (all of it at twice that, blended
+    /// linearly between, as `roll_first` takes over). The crawl spends 41-54 N m of the
+    /// 60 N m cap holding its chest up and level before a roll starts, and with the
+    /// whole cap at 90 N m its first falls in MuJoCo's tours dropped from 67 to 37 of
+    /// 600 (RESULTS "Crawl", session 20); this gives the extra only to a roll under
+    /// way. It shows in the residual's peak. 0: off.
+    #[serde(default)]
+    pub roll_torque_extra: f64,
 }
 
 /// `rough_speed` of a parameter file without it: no cap.
@@ -456,11 +465,7 @@ fn share_torque(p: &CrawlParams, cap: f64, roll: f64, torque: [f64; 3]) -> [f64;
     if !p.roll_first {
         return base;
     }
-    let w = if p.roll_first_from > 0.0 {
-        (roll.abs() / p.roll_first_from - 1.0).clamp(0.0, 1.0)
-    } else {
-        1.0
-    };
+    let w = roll_weight(p, roll);
     if w == 0.0 {
         return base;
     }
@@ -471,6 +476,35 @@ fn share_torque(p: &CrawlParams, cap: f64, roll: f64, torque: [f64; 3]) -> [f64;
     };
     let first = by_priority(torque, first, cap);
     [0, 1, 2].map(|i| base[i] + w * (first[i] - base[i]))
+}
+
+/// How far a body rolled by `roll` \[rad\] is into the roll's priority \[0, 1\]: 0 up
+/// to `roll_first_from`, 1 from twice it, linear between (1 at any roll when it is 0).
+fn roll_weight(p: &CrawlParams, roll: f64) -> f64 {
+    if p.roll_first_from > 0.0 {
+        (roll.abs() / p.roll_first_from - 1.0).clamp(0.0, 1.0)
+    } else {
+        1.0
+    }
+}
+
+/// `shared` (the torque as `share_torque` split it) with the roll torque that the cap
+/// cut off given back, up to `roll_torque_extra` times the roll's weight, and the
+/// norm cap \[N m\] the result keeps to: `cap` and that extra.
+fn extra_roll(
+    p: &CrawlParams,
+    cap: f64,
+    roll: f64,
+    torque: [f64; 3],
+    shared: [f64; 3],
+) -> ([f64; 3], f64) {
+    let extra = p.roll_torque_extra * roll_weight(p, roll);
+    if extra == 0.0 {
+        return (shared, cap);
+    }
+    let mut out = shared;
+    out[0] += (torque[0] - shared[0]).clamp(-extra, extra);
+    (out, cap + extra)
 }
 
 /// `torque` with each group of its components (in order) scaled down to the norm
@@ -532,9 +566,10 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 76] = [
+        let ranges: [(&'static str, f64, f64, f64); 77] = [
             ("turn_slowdown", self.turn_slowdown, 0.0, 10.0),
             ("up_level", self.up_level, 0.0, 5.0),
+            ("roll_torque_extra", self.roll_torque_extra, 0.0, 200.0),
             ("down_level", self.down_level, 0.0, 5.0),
             ("up_com_gain", self.up_com_gain, 0.0, 100.0),
             ("down_com_gain", self.down_com_gain, 0.0, 100.0),
@@ -1563,8 +1598,10 @@ impl CrawlGait {
             -(p.rot_gain * (pitch - pitch_des) + p.rot_damping * wy),
             p.yaw_torque_gain * yaw_err + p.rot_damping * (yaw_rate - wz),
         ];
-        let torque = share_torque(&p, self.settings.residual_torque_cap, roll, torque);
-        self.last_wrench = residual_wrench(&self.settings, obs.heading, force, torque, out);
+        let cap = self.settings.residual_torque_cap;
+        let shared = share_torque(&p, cap, roll, torque);
+        let (torque, cap) = extra_roll(&p, cap, roll, torque, shared);
+        self.last_wrench = residual_wrench(&self.settings, cap, obs.heading, force, torque, out);
     }
 
     /// Back to crawling from rest (used when the controller is reset).
@@ -2022,6 +2059,43 @@ mod tests {
         assert!((first + cap).abs() < 1e-9, "{first}");
         let shared = roll_torque(old);
         assert!(shared > -0.7 * cap, "{shared}");
+    }
+
+    #[test]
+    fn a_roll_under_way_gets_the_extra_roll_torque() {
+        let torque = |params: CrawlParams, roll: f64| {
+            let mut obs = crawling_obs();
+            // Rolled `roll` (right side low) while the yaw wags at 2 rad/s.
+            obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
+            obs.root_ang_vel = [0.0, 0.0, 2.0];
+            let mut gait = crawling_gait(params);
+            gait.act(&obs, &mut Action::default());
+            gait.last_wrench().torque
+        };
+        let cap = ControllerSettings::default().residual_torque_cap;
+        // A stiff roll gain, so that the roll torque asks for more than any budget.
+        let off = CrawlParams {
+            roll_first: true,
+            roll_first_from: 0.2,
+            rot_gain: 1000.0,
+            roll_torque_extra: 0.0,
+            ..CrawlParams::default()
+        };
+        let on = CrawlParams {
+            roll_torque_extra: 60.0,
+            ..off
+        };
+        // Past twice `roll_first_from`: all of the extra, to roll alone.
+        let (a, b) = (torque(off, 0.5), torque(on, 0.5));
+        assert!((a[0] + cap).abs() < 1e-9, "{a:?}");
+        assert!((b[0] + cap + 60.0).abs() < 1e-9, "{b:?}");
+        assert_eq!((a[1], a[2]), (b[1], b[2]));
+        // Halfway into the roll's priority: half of it.
+        let (a, b) = (torque(off, 0.3), torque(on, 0.3));
+        assert!((b[0] - (a[0] - 30.0)).abs() < 1e-9, "{a:?} {b:?}");
+        assert_eq!((a[1], a[2]), (b[1], b[2]));
+        // Below `roll_first_from`: none, bit for bit.
+        assert_eq!(torque(off, 0.1), torque(on, 0.1));
     }
 
     #[test]

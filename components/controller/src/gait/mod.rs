@@ -96,10 +96,12 @@ fn residual_force(
 }
 
 /// The bounded residual root wrench of a gait's step: `force` \[N\] and `torque`
-/// \[N m\] in the heading frame, each clamped to its cap in `settings`, turned into
-/// the world frame. It goes into the action only when a cap is non-zero.
+/// \[N m\] in the heading frame, the force clamped to its cap in `settings` and the
+/// torque to `torque_cap` \[N m\], turned into the world frame. It goes into the
+/// action only when a cap in `settings` is non-zero.
 fn residual_wrench(
     settings: &ControllerSettings,
+    torque_cap: f64,
     heading: f64,
     force: [f64; 3],
     torque: [f64; 3],
@@ -107,7 +109,7 @@ fn residual_wrench(
 ) -> RootWrench {
     let m = settings.body_mass;
     let force = clamp_norm(force, settings.residual_force_cap * m * GRAVITY);
-    let torque = clamp_norm(torque, settings.residual_torque_cap);
+    let torque = clamp_norm(torque, torque_cap);
     let wrench = RootWrench {
         force: from_heading_frame(heading, force),
         torque: from_heading_frame(heading, torque),
