@@ -619,6 +619,34 @@ fn summary_falls(out: &Path) -> usize {
 }
 
 #[test]
+fn the_summary_reports_the_residual_torque_the_metrics_record() {
+    let out = out_dir("torque");
+    let o = run_ok(&["--instructions", ROUTE, "--max-seconds", "3"], &out);
+    let text = String::from_utf8_lossy(&o.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.contains("agent 0 ["))
+        .expect("a leg");
+    // "... residual 6.3% / 23.0% m g, 11 / 40 N m"
+    let (head, _) = line.rsplit_once(" N m").expect("torque in N m");
+    let (_, torque) = head.rsplit_once(", ").expect("after the force");
+    let (mean, peak) = torque.split_once(" / ").expect("mean / peak");
+    let m = &recorded_json(&out, "metrics.json")["agents"][0]["results"][0]["metrics"];
+    let recorded = |k: &str| m[k].as_f64().unwrap().round();
+    assert_eq!(
+        mean.parse::<f64>().unwrap(),
+        recorded("residual_torque_mean"),
+        "{line}"
+    );
+    assert_eq!(
+        peak.parse::<f64>().unwrap(),
+        recorded("residual_torque_peak"),
+        "{line}"
+    );
+    assert!(recorded("residual_torque_peak") > 0.0, "{line}");
+}
+
+#[test]
 fn the_trajectory_records_the_falls_the_summary_counts() {
     // Running on the stairs and gravel strips falls now and then: the column must
     // rise exactly as often as the summary counts falls (it used to be the physics

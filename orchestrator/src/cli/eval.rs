@@ -261,6 +261,9 @@ struct Cell {
     fallen_fraction: f64,
     residual_mean: f64,
     residual_peak: f64,
+    /// Residual torque mean over the runs, peak over them \[N m\].
+    torque_mean: f64,
+    torque_peak: f64,
 }
 
 /// Runs `plamo eval`.
@@ -359,6 +362,8 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
         c.fallen_fraction += m.fallen_fraction / k;
         c.residual_mean += m.residual_force_mean / k;
         c.residual_peak = c.residual_peak.max(m.residual_force_peak);
+        c.torque_mean += m.residual_torque_mean / k;
+        c.torque_peak = c.torque_peak.max(m.residual_torque_peak);
     }
     let md = markdown(&cells, &a);
     say!("{md}");
@@ -400,15 +405,21 @@ fn markdown(cells: &[[Cell; 4]; 4], a: &LocomotionArgs) -> String {
         s.push('\n');
     }
     s.push_str(
-        "\nFalls per minute / fraction of steps fallen / residual force mean, peak [m*g]:\n\n\
+        "\nFalls per minute / fraction of steps fallen / residual force mean, peak [m*g] / \
+         residual torque mean, peak [N m]:\n\n\
          | terrain | crawl | crouch-walk | walk | run |\n|---|---|---|---|---|\n",
     );
     for (t, row) in cells.iter().enumerate() {
         s.push_str(&format!("| {} |", TERRAINS[t]));
         for c in row {
             s.push_str(&format!(
-                " {:.1} / {:.2} / {:.2}, {:.2} |",
-                c.falls_per_min, c.fallen_fraction, c.residual_mean, c.residual_peak
+                " {:.1} / {:.2} / {:.2}, {:.2} / {:.0}, {:.0} |",
+                c.falls_per_min,
+                c.fallen_fraction,
+                c.residual_mean,
+                c.residual_peak,
+                c.torque_mean,
+                c.torque_peak
             ));
         }
         s.push('\n');

@@ -344,7 +344,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
             all_ok &= r.success;
             let m = &r.metrics;
             say!(
-                "  agent {k} [{}] {text:<40} {:>6.1} s  xy {:.2} m  z {:.2} m  falls {}  residual {:.1}% / {:.1}% m g",
+                "  agent {k} [{}] {text:<40} {:>6.1} s  xy {:.2} m  z {:.2} m  falls {}  residual {:.1}% / {:.1}% m g, {:.0} / {:.0} N m",
                 if r.success {
                     "ok"
                 } else if r.reached {
@@ -358,6 +358,8 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
                 m.falls,
                 100.0 * m.residual_force_mean,
                 100.0 * m.residual_force_peak,
+                m.residual_torque_mean,
+                m.residual_torque_peak,
             );
         }
     }
