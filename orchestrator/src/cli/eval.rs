@@ -234,6 +234,9 @@ pub struct LocomotionArgs {
     /// Output directory (created).
     #[arg(long, default_value = "eval-locomotion")]
     out: PathBuf,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
 }
 
 const TERRAINS: [&str; 4] = ["flat", "slope", "rough", "stairs"];
@@ -317,7 +320,7 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
         jobs.len() as u64,
         "locomotion",
         "{bar:30} {pos}/{len} runs [{elapsed} < {eta}]",
-        false,
+        a.quiet,
     )?;
     let results: Vec<anyhow::Result<MetricsSummary>> = jobs
         .par_iter()
