@@ -600,14 +600,15 @@ impl BipedGait {
             -(g.rot_gain * (pitch - pitch_des) + g.rot_damping * wy),
             g.rot_gain * 0.2 * heading_err - g.rot_damping * wz,
         ];
-        self.last_wrench = residual_wrench(
-            &self.settings,
-            self.settings.residual_torque_cap,
-            obs.heading,
-            force,
-            torque,
-            out,
-        );
+        // A body tilting past `tilt_from` gets the extra on top of the cap.
+        let tilt = roll.hypot(pitch - pitch_des);
+        let lean = if g.tilt_from > 0.0 {
+            (tilt / g.tilt_from - 1.0).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        let cap = self.settings.residual_torque_cap + lean * g.tilt_torque_extra;
+        self.last_wrench = residual_wrench(&self.settings, cap, obs.heading, force, torque, out);
     }
 
     pub(crate) fn reset(&mut self) {
@@ -629,6 +630,34 @@ mod tests {
         assert_ne!(j.hip[0][1], j.hip[1][1]);
         let c = BipedGait::new(GaitParams::default(), ControllerSettings::default());
         assert!((c.legs.thigh - 0.41).abs() < 0.05 && (c.legs.shin - 0.39).abs() < 0.05);
+    }
+
+    #[test]
+    fn a_tilting_body_gets_the_extra_residual_torque() {
+        // The residual torque's norm for a body standing rolled by `roll` (left side
+        // up), with a roll gain that asks for more than any cap.
+        let torque = |extra: f64, roll: f64| {
+            let mut p = GaitParams::default();
+            p.residual.rot_gain = 1000.0;
+            p.residual.tilt_torque_extra = extra;
+            p.residual.tilt_from = 0.2;
+            let mut gait = BipedGait::new(p, ControllerSettings::default());
+            let mut obs = stepped(0.0, 10.0, 0.0);
+            obs.root_height = 0.9;
+            obs.head_pos = [0.0, 0.0, 1.47];
+            obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
+            gait.act(&obs, &mut Action::default());
+            let t = gait.last_wrench().torque;
+            (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt()
+        };
+        let cap = ControllerSettings::default().residual_torque_cap;
+        // Past twice `tilt_from`: all of it; between: part of it; below (the tilt
+        // counts the pitch's error from the form's lean too): none, bit for bit.
+        assert!((torque(0.0, 0.5) - cap).abs() < 1e-9);
+        assert!((torque(60.0, 0.5) - (cap + 60.0)).abs() < 1e-9);
+        let part = torque(60.0, 0.3);
+        assert!(part > cap + 1.0 && part < cap + 59.0, "{part}");
+        assert_eq!(torque(60.0, 0.05), torque(0.0, 0.05));
     }
 
     /// An observation whose map rises by `step` \[m\] from `x0` \[m\] ahead of the root,

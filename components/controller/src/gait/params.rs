@@ -238,6 +238,51 @@ pub struct ResidualGains {
     pub rot_gain: f64,
     /// Torque per rad/s of pelvis tilt rate \[N m s/rad\].
     pub rot_damping: f64,
+    /// Residual torque beyond `residual_torque_cap` for a body tilting past
+    /// `tilt_from` \[N m\]: all of it at twice that tilt, blended linearly between. The
+    /// body's tilt is rarely that large, so the mean torque hardly moves; where it is,
+    /// the biped fell in the random tours (RESULTS "Random 4-landmark scenes", session
+    /// 29). It shows in the residual's peak. 0: off.
+    #[serde(default)]
+    pub tilt_torque_extra: f64,
+    /// Tilt where `tilt_torque_extra` starts \[rad\]: roll and the pitch's error from
+    /// the form's lean together (their root sum square).
+    #[serde(default = "tilt_from")]
+    pub tilt_from: f64,
+}
+
+/// `tilt_from` of a parameter file without it \[rad\].
+fn tilt_from() -> f64 {
+    0.2
+}
+
+impl ResidualGains {
+    /// Every gain finite and not negative; the tilt extra and its start bounded.
+    fn validate(&self) -> Result<()> {
+        let fields = [
+            ("vel_gain", self.vel_gain, f64::MAX),
+            ("height_gain", self.height_gain, f64::MAX),
+            ("height_damping", self.height_damping, f64::MAX),
+            ("rot_gain", self.rot_gain, f64::MAX),
+            ("rot_damping", self.rot_damping, f64::MAX),
+            ("tilt_torque_extra", self.tilt_torque_extra, 200.0),
+            ("tilt_from", self.tilt_from, 1.5),
+        ];
+        for (field, v, hi) in fields {
+            if !(v.is_finite() && (0.0..=hi).contains(&v)) {
+                let allowed = if hi == f64::MAX {
+                    "a finite number >= 0".to_string()
+                } else {
+                    format!("in [0, {hi}]")
+                };
+                return Err(ControllerError::InvalidSettings {
+                    field,
+                    reason: format!("[residual] must be {allowed}, got {v}"),
+                });
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The whole parameter file.
@@ -303,7 +348,8 @@ impl GaitParams {
         }
         self.walk.validate("walk")?;
         self.run.validate("run")?;
-        self.crouch.validate("crouch")
+        self.crouch.validate("crouch")?;
+        self.residual.validate()
     }
 
     /// The form for a requested head height above ground \[m\] and speed \[m/s\]:
@@ -359,8 +405,10 @@ mod tests {
         assert!(e.to_string().contains("version 9"), "{e}");
         // One field out of range at a time: the message names it (or its section).
         type Spoil = fn(&mut GaitParams);
-        let spoiled: [(Spoil, &str); 6] = [
+        let spoiled: [(Spoil, &str); 8] = [
             (|p| p.walk.step_time = 0.0, "[walk]"),
+            (|p| p.residual.rot_gain = -1.0, "rot_gain"),
+            (|p| p.residual.tilt_from = 2.0, "tilt_from"),
             (|p| p.run.rough_fwd_gain = -0.01, "rough_fwd_gain"),
             (|p| p.run.pitch_fwd_gain = -0.5, "pitch_fwd_gain"),
             (|p| p.crouch.side_step_gain = -0.1, "side_step_gain"),
