@@ -239,10 +239,10 @@ pub struct ResidualGains {
     /// Torque per rad/s of pelvis tilt rate \[N m s/rad\].
     pub rot_damping: f64,
     /// Residual torque beyond `residual_torque_cap` for a body tilting past
-    /// `tilt_from` \[N m\]: all of it at twice that tilt, blended linearly between. The
-    /// body's tilt is rarely that large, so the mean torque hardly moves; where it is,
-    /// the biped fell in the random tours (RESULTS "Random 4-landmark scenes", session
-    /// 29). It shows in the residual's peak. 0: off.
+    /// `tilt_from` \[N m\]: all of it at twice that tilt, blended linearly between. 0:
+    /// off; measured, not shipped (RESULTS "Random 4-landmark scenes", session 29): at
+    /// 60 N m from 0.2 rad MuJoCo's tours gained ~3 points, but the crouch-walk fell
+    /// more on stairs and a walk without its torso servo was held up by it.
     #[serde(default)]
     pub tilt_torque_extra: f64,
     /// Tilt where `tilt_torque_extra` starts \[rad\]: roll and the pitch's error from
