@@ -46,13 +46,23 @@ pub(crate) fn from_heading_frame(heading: f64, v: [f64; 3]) -> [f64; 3] {
     [c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]]
 }
 
-/// Wraps an angle into (-pi, pi].
 /// 0 at `s` <= 0, 1 at `s` >= 1, cubic with zero slope at both ends between.
 pub(crate) fn smoothstep(s: f64) -> f64 {
     let s = s.clamp(0.0, 1.0);
     s * s * (3.0 - 2.0 * s)
 }
 
+/// How far `x` is past `from`, 0-1: 0 up to `from`, 1 from twice it, linear between;
+/// 1 at any `x` when `from` is 0 (the ramp of a switch that starts at a threshold).
+pub(crate) fn ramp_past(x: f64, from: f64) -> f64 {
+    if from > 0.0 {
+        (x / from - 1.0).clamp(0.0, 1.0)
+    } else {
+        1.0
+    }
+}
+
+/// Wraps an angle into (-pi, pi].
 pub(crate) fn wrap_angle(a: f64) -> f64 {
     let mut a = (a + PI).rem_euclid(2.0 * PI) - PI;
     if a <= -PI {

@@ -42,7 +42,7 @@ use plamo_physics::{FEET, NUM_BODIES, NUM_JOINTS};
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
 use super::{com_offset, mass_fractions, residual_force, residual_wrench};
-use crate::math::{clamp_norm, smoothstep, sub3, wrap_angle};
+use crate::math::{clamp_norm, ramp_past, smoothstep, sub3, wrap_angle};
 use crate::observation::{Observation, WAYPOINT_SPACING};
 use crate::policy::{Action, RootWrench};
 use crate::settings::ControllerSettings;
@@ -601,12 +601,7 @@ impl BipedGait {
             g.rot_gain * 0.2 * heading_err - g.rot_damping * wz,
         ];
         // A body tilting past `tilt_from` gets the extra on top of the cap.
-        let tilt = roll.hypot(pitch - pitch_des);
-        let lean = if g.tilt_from > 0.0 {
-            (tilt / g.tilt_from - 1.0).clamp(0.0, 1.0)
-        } else {
-            1.0
-        };
+        let lean = ramp_past(roll.hypot(pitch - pitch_des), g.tilt_from);
         let cap = self.settings.residual_torque_cap + lean * g.tilt_torque_extra;
         self.last_wrench = residual_wrench(&self.settings, cap, obs.heading, force, torque, out);
     }
@@ -623,6 +618,7 @@ impl BipedGait {
 mod tests {
     use super::*;
     use crate::gait::map_plane::map_coord;
+    use crate::math::norm3;
 
     #[test]
     fn joints_resolve() {
@@ -647,8 +643,7 @@ mod tests {
             obs.head_pos = [0.0, 0.0, 1.47];
             obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
             gait.act(&obs, &mut Action::default());
-            let t = gait.last_wrench().torque;
-            (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt()
+            norm3(gait.last_wrench().torque)
         };
         let cap = ControllerSettings::default().residual_torque_cap;
         // Past twice `tilt_from`: all of it; between: part of it; below (the tilt

@@ -64,7 +64,7 @@ use super::plan_ground::PlanGround;
 use super::plan_trace::PlanTrace;
 use super::{com_over_feet, mass_fractions, residual_force, residual_wrench};
 use crate::error::{ControllerError, Result};
-use crate::math::{smoothstep, sub3, wrap_angle};
+use crate::math::{ramp_past, smoothstep, sub3, wrap_angle};
 use crate::observation::{Observation, REACH_FIRST_ROW, REACH_ROWS, WAYPOINT_SPACING};
 use crate::policy::{Action, RootWrench};
 use crate::settings::{ControllerSettings, GRAVITY};
@@ -465,7 +465,7 @@ fn share_torque(p: &CrawlParams, cap: f64, roll: f64, torque: [f64; 3]) -> [f64;
     if !p.roll_first {
         return base;
     }
-    let w = roll_weight(p, roll);
+    let w = ramp_past(roll.abs(), p.roll_first_from);
     if w == 0.0 {
         return base;
     }
@@ -478,18 +478,9 @@ fn share_torque(p: &CrawlParams, cap: f64, roll: f64, torque: [f64; 3]) -> [f64;
     [0, 1, 2].map(|i| base[i] + w * (first[i] - base[i]))
 }
 
-/// How far a body rolled by `roll` \[rad\] is into the roll's priority \[0, 1\]: 0 up
-/// to `roll_first_from`, 1 from twice it, linear between (1 at any roll when it is 0).
-fn roll_weight(p: &CrawlParams, roll: f64) -> f64 {
-    if p.roll_first_from > 0.0 {
-        (roll.abs() / p.roll_first_from - 1.0).clamp(0.0, 1.0)
-    } else {
-        1.0
-    }
-}
-
 /// `shared` (the torque as `share_torque` split it) with the roll torque that the cap
-/// cut off given back, up to `roll_torque_extra` times the roll's weight, and the
+/// cut off given back, up to `roll_torque_extra` times the roll's share past
+/// `roll_first_from` (as `roll_first` takes over), and the
 /// norm cap \[N m\] the result keeps to: `cap` and that extra.
 fn extra_roll(
     p: &CrawlParams,
@@ -498,7 +489,7 @@ fn extra_roll(
     torque: [f64; 3],
     shared: [f64; 3],
 ) -> ([f64; 3], f64) {
-    let extra = p.roll_torque_extra * roll_weight(p, roll);
+    let extra = p.roll_torque_extra * ramp_past(roll.abs(), p.roll_first_from);
     if extra == 0.0 {
         return (shared, cap);
     }
@@ -1635,6 +1626,23 @@ mod tests {
         obs
     }
 
+    /// `crawling_obs` rolled by `roll` \[rad\] (> 0: right side low).
+    fn rolled_obs(roll: f64) -> Observation {
+        let mut obs = crawling_obs();
+        obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
+        obs
+    }
+
+    /// The residual torque (heading frame) of one step rolled `roll` \[rad\] (right
+    /// side low) while the yaw wags at 2 rad/s.
+    fn wagging_torque(params: CrawlParams, roll: f64) -> [f64; 3] {
+        let mut obs = rolled_obs(roll);
+        obs.root_ang_vel = [0.0, 0.0, 2.0];
+        let mut gait = crawling_gait(params);
+        gait.act(&obs, &mut Action::default());
+        gait.last_wrench().torque
+    }
+
     /// A crawl gait with `params`, down and crawling (reset from rest).
     fn crawling_gait(params: CrawlParams) -> CrawlGait {
         let mut gait = CrawlGait::new(params, ControllerSettings::default());
@@ -1864,8 +1872,7 @@ mod tests {
     /// Knee, hip and ankle pitch targets (right, left) `secs` into the get-up (or,
     /// `down`, the get-down) of a body rolled `roll` (> 0: right side low).
     fn transition_legs(params: CrawlParams, roll: f64, down: bool, secs: f64) -> [[f64; 3]; 2] {
-        let mut obs = crawling_obs();
-        obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
+        let obs = rolled_obs(roll);
         let mut gait = crawling_gait(params);
         if down {
             gait.begin_down(&obs);
@@ -2035,16 +2042,7 @@ mod tests {
 
     #[test]
     fn roll_comes_first_in_the_residual_torque() {
-        let roll_torque = |params: CrawlParams| {
-            let mut obs = crawling_obs();
-            // Rolled 0.4 rad (right side low) while the yaw wags at 2 rad/s.
-            let roll: f64 = 0.4;
-            obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
-            obs.root_ang_vel = [0.0, 0.0, 2.0];
-            let mut gait = crawling_gait(params);
-            gait.act(&obs, &mut Action::default());
-            gait.last_wrench().torque[0]
-        };
+        let roll_torque = |params: CrawlParams| wagging_torque(params, 0.4)[0];
         let cap = ControllerSettings::default().residual_torque_cap;
         let old = CrawlParams {
             roll_first: false,
@@ -2063,15 +2061,7 @@ mod tests {
 
     #[test]
     fn a_roll_under_way_gets_the_extra_roll_torque() {
-        let torque = |params: CrawlParams, roll: f64| {
-            let mut obs = crawling_obs();
-            // Rolled `roll` (right side low) while the yaw wags at 2 rad/s.
-            obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
-            obs.root_ang_vel = [0.0, 0.0, 2.0];
-            let mut gait = crawling_gait(params);
-            gait.act(&obs, &mut Action::default());
-            gait.last_wrench().torque
-        };
+        let torque = wagging_torque;
         let cap = ControllerSettings::default().residual_torque_cap;
         // A stiff roll gain, so that the roll torque asks for more than any budget.
         let off = CrawlParams {
@@ -2103,8 +2093,7 @@ mod tests {
         // Elbow targets (right, left) of a crawl rolled `roll` (right side low) at a
         // roll rate `rate`.
         let elbows = |params: CrawlParams, roll: f64, rate: f64| {
-            let mut obs = crawling_obs();
-            obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
+            let mut obs = rolled_obs(roll);
             obs.root_ang_vel = [rate, 0.0, 0.0];
             let mut gait = crawling_gait(params);
             let mut out = Action::default();
@@ -2153,9 +2142,7 @@ mod tests {
         // from `phase`, rolled 0.3 rad right side low (the forearm crawl: its elbow is
         // the contact, placed by the shoulder and elbow together).
         let right_arm = |params: CrawlParams, phase: f64| {
-            let mut obs = crawling_obs();
-            let roll: f64 = 0.3;
-            obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
+            let obs = rolled_obs(0.3);
             let mut gait = crawling_gait(params);
             gait.phase = phase;
             let mut out = Action::default();
@@ -2197,9 +2184,7 @@ mod tests {
         // The right elbow's target after 2 s rolled 0.4 rad (right side low) over a
         // height map.
         let right_elbow = |params: CrawlParams, map: &dyn Fn(f64, f64) -> f64| {
-            let mut obs = crawling_obs();
-            let roll: f64 = 0.4;
-            obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
+            let mut obs = rolled_obs(0.4);
             fill_map(&mut obs, map);
             let mut gait = crawling_gait(params);
             let mut out = Action::default();

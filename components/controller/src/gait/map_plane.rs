@@ -2,6 +2,7 @@
 //! under the body, with treads and gravel averaged out (the biped's ramp under its
 //! feet, the crawl's measure of stepped ground).
 
+use crate::math::ramp_past;
 use plamo_scenes::{LOCAL_MAP_SIDE, LOCAL_MAP_SPACING};
 
 /// Distance of the map's first and last rows (and columns) from its centre \[m\].
@@ -74,7 +75,7 @@ impl MapPlane {
     /// Share of rough ground under `map`, 0-1: its [`roughness`](Self::roughness)
     /// from `step` \[m\] (0) to twice it (1).
     pub(crate) fn rough_share(map: &[f64], step: f64) -> f64 {
-        (Self::roughness(map) / step - 1.0).clamp(0.0, 1.0)
+        ramp_past(Self::roughness(map), step)
     }
 }
 

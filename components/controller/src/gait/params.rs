@@ -260,17 +260,17 @@ impl ResidualGains {
     /// Every gain finite and not negative; the tilt extra and its start bounded.
     fn validate(&self) -> Result<()> {
         let fields = [
-            ("vel_gain", self.vel_gain, f64::MAX),
-            ("height_gain", self.height_gain, f64::MAX),
-            ("height_damping", self.height_damping, f64::MAX),
-            ("rot_gain", self.rot_gain, f64::MAX),
-            ("rot_damping", self.rot_damping, f64::MAX),
+            ("vel_gain", self.vel_gain, f64::INFINITY),
+            ("height_gain", self.height_gain, f64::INFINITY),
+            ("height_damping", self.height_damping, f64::INFINITY),
+            ("rot_gain", self.rot_gain, f64::INFINITY),
+            ("rot_damping", self.rot_damping, f64::INFINITY),
             ("tilt_torque_extra", self.tilt_torque_extra, 200.0),
             ("tilt_from", self.tilt_from, 1.5),
         ];
         for (field, v, hi) in fields {
             if !(v.is_finite() && (0.0..=hi).contains(&v)) {
-                let allowed = if hi == f64::MAX {
+                let allowed = if hi.is_infinite() {
                     "a finite number >= 0".to_string()
                 } else {
                     format!("in [0, {hi}]")
