@@ -118,11 +118,13 @@ fn an_unknown_terrain_is_an_error_that_lists_the_known_ones() {
 
 #[test]
 fn the_fall_cost_weighs_each_fall_as_set() {
-    // A walk whose torso servo is off falls within seconds; the same rollouts priced
-    // at 10 per fall instead of the walk's 1 cost 9 more per fall.
+    // A walk whose torso servo is off (and without the residual's extra torque for a
+    // tilting body, which would hold it up) falls within seconds; the same rollouts
+    // priced at 10 per fall instead of the walk's 1 cost 9 more per fall.
     let mut params = TunedParams::default();
     params.gait.walk.torso_kp = 0.0;
     params.gait.walk.torso_kd = 0.0;
+    params.gait.walk.tilt_torque_extra = 0.0;
     let base = TuneSettings {
         duration: 4.0,
         ..settings(Form::Walk, 3, "flat")

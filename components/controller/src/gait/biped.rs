@@ -600,9 +600,9 @@ impl BipedGait {
             -(g.rot_gain * (pitch - pitch_des) + g.rot_damping * wy),
             g.rot_gain * 0.2 * heading_err - g.rot_damping * wz,
         ];
-        // A body tilting past `tilt_from` gets the extra on top of the cap.
+        // A body tilting past `tilt_from` gets its form's extra on top of the cap.
         let lean = ramp_past(roll.hypot(pitch - pitch_des), g.tilt_from);
-        let cap = self.settings.residual_torque_cap + lean * g.tilt_torque_extra;
+        let cap = self.settings.residual_torque_cap + lean * form.tilt_torque_extra;
         self.last_wrench = residual_wrench(&self.settings, cap, obs.heading, force, torque, out);
     }
 
@@ -629,18 +629,22 @@ mod tests {
     }
 
     #[test]
-    fn a_tilting_body_gets_the_extra_residual_torque() {
+    fn a_tilting_body_gets_its_forms_extra_residual_torque() {
         // The residual torque's norm for a body standing rolled by `roll` (left side
-        // up), with a roll gain that asks for more than any cap.
-        let torque = |extra: f64, roll: f64| {
+        // up) with its head `head` \[m\] above the ground (1.47: walk or run, 0.8:
+        // crouch-walk), with a roll gain that asks for more than any cap; the walk and
+        // the run get `upright` \[N m\] of extra, the crouch `crouch`.
+        let torque = |upright: f64, crouch: f64, roll: f64, head: f64| {
             let mut p = GaitParams::default();
             p.residual.rot_gain = 1000.0;
-            p.residual.tilt_torque_extra = extra;
+            p.walk.tilt_torque_extra = upright;
+            p.run.tilt_torque_extra = upright;
+            p.crouch.tilt_torque_extra = crouch;
             p.residual.tilt_from = 0.2;
             let mut gait = BipedGait::new(p, ControllerSettings::default());
             let mut obs = stepped(0.0, 10.0, 0.0);
-            obs.root_height = 0.9;
-            obs.head_pos = [0.0, 0.0, 1.47];
+            obs.root_height = 0.5;
+            obs.head_pos = [0.0, 0.0, head - obs.root_height];
             obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
             gait.act(&obs, &mut Action::default());
             norm3(gait.last_wrench().torque)
@@ -648,11 +652,14 @@ mod tests {
         let cap = ControllerSettings::default().residual_torque_cap;
         // Past twice `tilt_from`: all of it; between: part of it; below (the tilt
         // counts the pitch's error from the form's lean too): none, bit for bit.
-        assert!((torque(0.0, 0.5) - cap).abs() < 1e-9);
-        assert!((torque(60.0, 0.5) - (cap + 60.0)).abs() < 1e-9);
-        let part = torque(60.0, 0.3);
+        assert!((torque(0.0, 0.0, 0.5, 1.47) - cap).abs() < 1e-9);
+        assert!((torque(60.0, 0.0, 0.5, 1.47) - (cap + 60.0)).abs() < 1e-9);
+        let part = torque(60.0, 0.0, 0.3, 1.47);
         assert!(part > cap + 1.0 && part < cap + 59.0, "{part}");
-        assert_eq!(torque(60.0, 0.05), torque(0.0, 0.05));
+        assert_eq!(torque(60.0, 0.0, 0.05, 1.47), torque(0.0, 0.0, 0.05, 1.47));
+        // The crouch-walk gets its own form's extra, not the walk's.
+        assert!((torque(60.0, 0.0, 0.5, 0.8) - cap).abs() < 1e-9);
+        assert!((torque(0.0, 30.0, 0.5, 0.8) - (cap + 30.0)).abs() < 1e-9);
     }
 
     /// An observation whose map rises by `step` \[m\] from `x0` \[m\] ahead of the root,

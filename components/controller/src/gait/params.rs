@@ -132,6 +132,15 @@ pub struct FormParams {
     /// past it too. Absent in older files: 0.6 rad.
     #[serde(default = "default_turn_from")]
     pub turn_from: f64,
+    /// Residual torque beyond `residual_torque_cap` for a body tilting past
+    /// `[residual] tilt_from` \[N m\]: all of it at twice that tilt, blended linearly
+    /// between. Per form because its effect is: measured at 60 N m from 0.2 rad
+    /// (RESULTS "Random 4-landmark scenes", sessions 29-30), MuJoCo's tours gain ~2
+    /// points with it in all three forms and none beyond noise with it in the walk and
+    /// the run alone; the gain is the crouch-walk's, whose falls on stairs at 2 m/s it
+    /// raises by half. 0 (off) in both built-in files. Absent in older files: 0.
+    #[serde(default)]
+    pub tilt_torque_extra: f64,
 }
 
 fn default_turn_from() -> f64 {
@@ -174,6 +183,7 @@ impl FormParams {
             side_step_gain: l(self.side_step_gain, b.side_step_gain),
             turn_lat_share: l(self.turn_lat_share, b.turn_lat_share),
             turn_from: l(self.turn_from, b.turn_from),
+            tilt_torque_extra: l(self.tilt_torque_extra, b.tilt_torque_extra),
         }
     }
 
@@ -220,6 +230,9 @@ impl FormParams {
         if !(self.push_err_gain >= 0.0 && self.push_err_gain < 1.0) {
             return bad("push_err_gain", "must be in [0, 1) s");
         }
+        if !(self.tilt_torque_extra >= 0.0 && self.tilt_torque_extra <= 200.0) {
+            return bad("tilt_torque_extra", "must be in [0, 200] N m");
+        }
         Ok(())
     }
 }
@@ -238,15 +251,8 @@ pub struct ResidualGains {
     pub rot_gain: f64,
     /// Torque per rad/s of pelvis tilt rate \[N m s/rad\].
     pub rot_damping: f64,
-    /// Residual torque beyond `residual_torque_cap` for a body tilting past
-    /// `tilt_from` \[N m\]: all of it at twice that tilt, blended linearly between. 0:
-    /// off; measured, not shipped (RESULTS "Random 4-landmark scenes", session 29): at
-    /// 60 N m from 0.2 rad MuJoCo's tours gained ~3 points, but the crouch-walk fell
-    /// more on stairs and a walk without its torso servo was held up by it.
-    #[serde(default)]
-    pub tilt_torque_extra: f64,
-    /// Tilt where `tilt_torque_extra` starts \[rad\]: roll and the pitch's error from
-    /// the form's lean together (their root sum square).
+    /// Tilt where the forms' `tilt_torque_extra` starts \[rad\]: roll and the pitch's
+    /// error from the form's lean together (their root sum square).
     #[serde(default = "tilt_from")]
     pub tilt_from: f64,
 }
@@ -257,7 +263,7 @@ fn tilt_from() -> f64 {
 }
 
 impl ResidualGains {
-    /// Every gain finite and not negative; the tilt extra and its start bounded.
+    /// Every gain finite and not negative; the tilt extra's start bounded.
     fn validate(&self) -> Result<()> {
         let fields = [
             ("vel_gain", self.vel_gain, f64::INFINITY),
@@ -265,7 +271,6 @@ impl ResidualGains {
             ("height_damping", self.height_damping, f64::INFINITY),
             ("rot_gain", self.rot_gain, f64::INFINITY),
             ("rot_damping", self.rot_damping, f64::INFINITY),
-            ("tilt_torque_extra", self.tilt_torque_extra, 200.0),
             ("tilt_from", self.tilt_from, 1.5),
         ];
         for (field, v, hi) in fields {
@@ -405,7 +410,7 @@ mod tests {
         assert!(e.to_string().contains("version 9"), "{e}");
         // One field out of range at a time: the message names it (or its section).
         type Spoil = fn(&mut GaitParams);
-        let spoiled: [(Spoil, &str); 8] = [
+        let spoiled: [(Spoil, &str); 9] = [
             (|p| p.walk.step_time = 0.0, "[walk]"),
             (|p| p.residual.rot_gain = -1.0, "rot_gain"),
             (|p| p.residual.tilt_from = 2.0, "tilt_from"),
@@ -414,6 +419,7 @@ mod tests {
             (|p| p.crouch.side_step_gain = -0.1, "side_step_gain"),
             (|p| p.walk.turn_lat_share = 1.5, "turn_lat_share"),
             (|p| p.run.turn_from = -0.1, "turn_from"),
+            (|p| p.walk.tilt_torque_extra = f64::NAN, "tilt_torque_extra"),
         ];
         for (spoil, field) in spoiled {
             let mut bad = GaitParams::default();
