@@ -600,8 +600,11 @@ impl BipedGait {
             -(g.rot_gain * (pitch - pitch_des) + g.rot_damping * wy),
             g.rot_gain * 0.2 * heading_err - g.rot_damping * wz,
         ];
-        // A body tilting past `tilt_from` gets its form's extra on top of the cap.
-        let lean = ramp_past(roll.hypot(pitch - pitch_des), g.tilt_from);
+        // A body tilting past `tilt_from` sideways or backwards gets its form's extra on
+        // top of the cap; a forward pitch is left to the steps (foot placement catches
+        // it: `pitch_fwd_gain`), which can do nothing for the other two.
+        let back = (pitch - pitch_des).min(0.0);
+        let lean = ramp_past(roll.hypot(back), g.tilt_from);
         let cap = self.settings.residual_torque_cap + lean * form.tilt_torque_extra;
         self.last_wrench = residual_wrench(&self.settings, cap, obs.heading, force, torque, out);
     }
@@ -629,12 +632,13 @@ mod tests {
     }
 
     #[test]
-    fn a_tilting_body_gets_its_forms_extra_residual_torque() {
-        // The residual torque's norm for a body standing rolled by `roll` (left side
-        // up) with its head `head` \[m\] above the ground (1.47: walk or run, 0.8:
-        // crouch-walk), with a roll gain that asks for more than any cap; the walk and
-        // the run get `upright` \[N m\] of extra, the crouch `crouch`.
-        let torque = |upright: f64, crouch: f64, roll: f64, head: f64| {
+    fn a_body_tilting_sideways_or_back_gets_its_forms_extra_residual_torque() {
+        // The residual torque's norm for a body standing rotated by `rot` (the
+        // observation's two pelvis axes) with its head `head` \[m\] above the ground
+        // (1.47: walk or run, 0.8: crouch-walk), with a tilt gain that asks for more
+        // than any cap; the walk and the run get `upright` \[N m\] of extra, the crouch
+        // `crouch`.
+        let torque = |upright: f64, crouch: f64, rot: [f64; 6], head: f64| {
             let mut p = GaitParams::default();
             p.residual.rot_gain = 1000.0;
             p.walk.tilt_torque_extra = upright;
@@ -645,21 +649,31 @@ mod tests {
             let mut obs = stepped(0.0, 10.0, 0.0);
             obs.root_height = 0.5;
             obs.head_pos = [0.0, 0.0, head - obs.root_height];
-            obs.root_rotation = [1.0, 0.0, 0.0, 0.0, roll.cos(), roll.sin()];
+            obs.root_rotation = rot;
             gait.act(&obs, &mut Action::default());
             norm3(gait.last_wrench().torque)
         };
+        // Left side up by `a`; nose down (forward, the walk's lean is -0.15) by `a`.
+        let rolled = |a: f64| [1.0, 0.0, 0.0, 0.0, a.cos(), a.sin()];
+        let pitched = |a: f64| [a.cos(), 0.0, -a.sin(), 0.0, 1.0, 0.0];
         let cap = ControllerSettings::default().residual_torque_cap;
         // Past twice `tilt_from`: all of it; between: part of it; below (the tilt
         // counts the pitch's error from the form's lean too): none, bit for bit.
-        assert!((torque(0.0, 0.0, 0.5, 1.47) - cap).abs() < 1e-9);
-        assert!((torque(60.0, 0.0, 0.5, 1.47) - (cap + 60.0)).abs() < 1e-9);
-        let part = torque(60.0, 0.0, 0.3, 1.47);
+        assert!((torque(0.0, 0.0, rolled(0.5), 1.47) - cap).abs() < 1e-9);
+        assert!((torque(60.0, 0.0, rolled(0.5), 1.47) - (cap + 60.0)).abs() < 1e-9);
+        let part = torque(60.0, 0.0, rolled(0.3), 1.47);
         assert!(part > cap + 1.0 && part < cap + 59.0, "{part}");
-        assert_eq!(torque(60.0, 0.0, 0.05, 1.47), torque(0.0, 0.0, 0.05, 1.47));
+        let small = rolled(0.05);
+        assert_eq!(
+            torque(60.0, 0.0, small, 1.47),
+            torque(0.0, 0.0, small, 1.47)
+        );
+        // Pitched back: all of it; pitched forward as far: none (the steps catch it).
+        assert!((torque(60.0, 0.0, pitched(-0.8), 1.47) - (cap + 60.0)).abs() < 1e-9);
+        assert!((torque(60.0, 0.0, pitched(0.6), 1.47) - cap).abs() < 1e-9);
         // The crouch-walk gets its own form's extra, not the walk's.
-        assert!((torque(60.0, 0.0, 0.5, 0.8) - cap).abs() < 1e-9);
-        assert!((torque(0.0, 30.0, 0.5, 0.8) - (cap + 30.0)).abs() < 1e-9);
+        assert!((torque(60.0, 0.0, rolled(0.5), 0.8) - cap).abs() < 1e-9);
+        assert!((torque(0.0, 30.0, rolled(0.5), 0.8) - (cap + 30.0)).abs() < 1e-9);
     }
 
     /// An observation whose map rises by `step` \[m\] from `x0` \[m\] ahead of the root,
