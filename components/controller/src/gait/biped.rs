@@ -658,7 +658,7 @@ mod tests {
         let pitched = |a: f64| [a.cos(), 0.0, -a.sin(), 0.0, 1.0, 0.0];
         let cap = ControllerSettings::default().residual_torque_cap;
         // Past twice `tilt_from`: all of it; between: part of it; below (the tilt
-        // counts the pitch's error from the form's lean too): none, bit for bit.
+        // counts the pitch's error behind the form's lean too): none, bit for bit.
         assert!((torque(0.0, 0.0, rolled(0.5), 1.47) - cap).abs() < 1e-9);
         assert!((torque(60.0, 0.0, rolled(0.5), 1.47) - (cap + 60.0)).abs() < 1e-9);
         let part = torque(60.0, 0.0, rolled(0.3), 1.47);

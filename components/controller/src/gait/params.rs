@@ -132,13 +132,13 @@ pub struct FormParams {
     /// past it too. Absent in older files: 0.6 rad.
     #[serde(default = "default_turn_from")]
     pub turn_from: f64,
-    /// Residual torque beyond `residual_torque_cap` for a body tilting past
-    /// `[residual] tilt_from` \[N m\]: all of it at twice that tilt, blended linearly
-    /// between. Per form because its effect is: measured at 60 N m from 0.2 rad
-    /// (RESULTS "Random 4-landmark scenes", sessions 29-30), MuJoCo's tours gain ~2
-    /// points with it in all three forms and none beyond noise with it in the walk and
-    /// the run alone; the gain is the crouch-walk's, whose falls on stairs at 2 m/s it
-    /// raises by half. 0 (off) in both built-in files. Absent in older files: 0.
+    /// Residual torque beyond `residual_torque_cap` for a body rolling or pitching back
+    /// past `[residual] tilt_from` \[N m\]: all of it at twice that tilt, blended
+    /// linearly between; a forward pitch is left to the steps. Per form because its
+    /// effect is (RESULTS "Random 4-landmark scenes", session 30): at 60 N m in the walk
+    /// and the run alone MuJoCo's tours gained nothing beyond noise, in all three forms
+    /// ~2-4 points, the crouch-walk's. 60 in every form of both built-in files. Absent
+    /// in older files: 0 (off).
     #[serde(default)]
     pub tilt_torque_extra: f64,
 }
@@ -252,7 +252,7 @@ pub struct ResidualGains {
     /// Torque per rad/s of pelvis tilt rate \[N m s/rad\].
     pub rot_damping: f64,
     /// Tilt where the forms' `tilt_torque_extra` starts \[rad\]: roll and the pitch's
-    /// error from the form's lean together (their root sum square).
+    /// error behind the form's lean together (their root sum square).
     #[serde(default = "tilt_from")]
     pub tilt_from: f64,
 }
