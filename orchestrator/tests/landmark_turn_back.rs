@@ -11,6 +11,8 @@ mod support;
 
 use std::process::Command;
 
+use support::recorded_json;
+
 const BIN: &str = env!("CARGO_BIN_EXE_plamo");
 const TOUR: &str =
     "Crouch-walk from the well to the swing; then crouch-walk to the tent; then walk to the rock";
@@ -35,9 +37,11 @@ fn a_crouch_walk_that_turns_back_at_a_landmark_goes_on_without_a_fall() {
     // and has fallen once there since the biped's extra tilt torque (session 30: one of
     // the tours it loses; it gains more, RESULTS "Random 4-landmark scenes"); a run with
     // a fall exits with status 1 after its summary, a failed one without metrics.
-    let metrics = std::fs::read_to_string(out.join("metrics.json"))
-        .unwrap_or_else(|e| panic!("no metrics.json ({e})\n{context}"));
-    let metrics: serde_json::Value = serde_json::from_str(&metrics).unwrap();
+    assert!(
+        out.join("metrics.json").exists(),
+        "no metrics.json\n{context}"
+    );
+    let metrics = recorded_json(&out, "metrics.json");
     assert_eq!(metrics["status"], "finished", "{context}");
     let legs = metrics["agents"][0]["results"].as_array().unwrap();
     assert_eq!(legs.len(), 3, "{context}");
@@ -57,8 +61,7 @@ fn a_crouch_walk_that_turns_back_at_a_landmark_goes_on_without_a_fall() {
     );
     // The plan stopped at the swing: the first leg ends at rest and the second
     // starts from it.
-    let plans: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("plans.json")).unwrap()).unwrap();
+    let plans = recorded_json(&out, "plans.json");
     let route = &plans["initial"][0]["route"];
     let end_v = route[0]["points"].as_array().unwrap().last().unwrap()["v"]
         .as_f64()

@@ -6,8 +6,10 @@
 mod support;
 
 use std::path::{Path, PathBuf};
+
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
+use support::recorded_json;
 
 const BIN: &str = env!("CARGO_BIN_EXE_plamo");
 const ROUTE: &str = "Run from the tree to the car, then crawl to the bench";
@@ -603,11 +605,6 @@ fn recorded_falls(out: &Path) -> usize {
         .count()
 }
 
-/// A JSON file a run recorded into `out`.
-fn recorded_json(out: &Path, file: &str) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(out.join(file)).unwrap()).unwrap()
-}
-
 /// The falls the run's summary counts (metrics.json).
 fn summary_falls(out: &Path) -> usize {
     recorded_json(out, "metrics.json")["agents"][0]["results"]
@@ -765,8 +762,7 @@ fn plamo_plan_writes_the_plan_with_a_planner_parameter_file() {
             .unwrap()
     };
     let top_speed = |out: &Path| {
-        let v: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(out.join("plan.json")).unwrap()).unwrap();
+        let v = recorded_json(out, "plan.json");
         v["route"]
             .as_array()
             .unwrap()

@@ -19,6 +19,12 @@ pub fn out_dir(tag: &str, name: &str) -> OutDir {
     )
 }
 
+/// A JSON file a run recorded into `out`.
+#[allow(dead_code)] // not every test file reads what a run recorded
+pub fn recorded_json(out: &Path, file: &str) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(out.join(file)).unwrap()).unwrap()
+}
+
 impl Deref for OutDir {
     type Target = Path;
     fn deref(&self) -> &Path {

@@ -407,6 +407,8 @@ impl BipedGait {
             );
         let slope = (ground.at(SLOPE_SPAN, 0.0) - ground.at(0.0, 0.0)) / SLOPE_SPAN;
         let pitch_des = form.trunk_pitch + form.lean_per_speed * speed + LEAN_PER_SLOPE * slope;
+        // + forward of the form's lean.
+        let pitch_err = pitch - pitch_des;
         let pelvis_des = form.pelvis_height;
         // Integral speed control: a walker that lags (the engines differ in how far a
         // step carries) places its feet closer until the speed matches.
@@ -468,7 +470,7 @@ impl BipedGait {
         };
         let final_xy = [
             com_x + fwd_gain * vx + form.foot_err_gain * (vx - v_des[0]) - self.foot_bias
-                + form.pitch_fwd_gain * (pitch - pitch_des).max(0.0),
+                + form.pitch_fwd_gain * pitch_err.max(0.0),
             final_y,
         ];
         let start = [
@@ -543,7 +545,7 @@ impl BipedGait {
                         .clamp(-jd.max_torque, jd.max_torque)
                 };
                 let comp = form.swing_comp;
-                hy += (form.torso_kp * (pitch - pitch_des) + form.torso_kd * wy
+                hy += (form.torso_kp * pitch_err + form.torso_kd * wy
                     - comp * sw_torque(1, targets[j.hip[swing][1]]))
                     / self.hip_kp;
                 hx += (form.torso_kp * roll + form.torso_kd * wx
@@ -597,14 +599,13 @@ impl BipedGait {
         );
         let torque = [
             -(g.rot_gain * roll + g.rot_damping * wx),
-            -(g.rot_gain * (pitch - pitch_des) + g.rot_damping * wy),
+            -(g.rot_gain * pitch_err + g.rot_damping * wy),
             g.rot_gain * 0.2 * heading_err - g.rot_damping * wz,
         ];
         // A body tilting past `tilt_from` sideways or backwards gets its form's extra on
         // top of the cap; a forward pitch is left to the steps (foot placement catches
         // it: `pitch_fwd_gain`), which can do nothing for the other two.
-        let back = (pitch - pitch_des).min(0.0);
-        let lean = ramp_past(roll.hypot(back), g.tilt_from);
+        let lean = ramp_past(roll.hypot(pitch_err.min(0.0)), g.tilt_from);
         let cap = self.settings.residual_torque_cap + lean * form.tilt_torque_extra;
         self.last_wrench = residual_wrench(&self.settings, cap, obs.heading, force, torque, out);
     }
