@@ -14,6 +14,7 @@ use plamo_planner::{
 };
 use plamo_scenes::{ObstacleShape, Scene};
 
+use super::fall_posture::FallPosture;
 use super::ground::{GroundKind, ground_kind};
 use crate::lockstep::{InProcess, Links, Lockstep, RunError, StepStatus};
 use crate::spec::{ControllerParams, RunSpec, controller_with, default_time_limit};
@@ -94,14 +95,17 @@ pub struct Episode {
     pub digest: u64,
 }
 
-/// Where a fall happened: the form the instruction asked for and the ground under
-/// the root when the fall rule first judged the humanoid fallen.
+/// Where a fall happened: the form the instruction asked for, the ground under
+/// the root and the body's posture when the fall rule first judged the humanoid
+/// fallen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FallSite {
     /// The instruction's locomotion.
     pub locomotion: Locomotion,
     /// The ground there.
     pub ground: GroundKind,
+    /// How the body lay.
+    pub posture: FallPosture,
 }
 
 /// A locomotion's instruction verb ("crouch-walk"), as the experiments write it.
@@ -150,6 +154,16 @@ impl Episode {
         self.fall_sites
             .iter()
             .map(FallSite::field)
+            .collect::<Vec<_>>()
+            .join(";")
+    }
+
+    /// The fall postures as `posture;...` (in the order of
+    /// [`Episode::fall_sites_field`]), a CSV-safe field.
+    pub fn fall_postures_field(&self) -> String {
+        self.fall_sites
+            .iter()
+            .map(|s| s.posture.name())
             .collect::<Vec<_>>()
             .join(";")
     }
@@ -285,7 +299,9 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
     let mut next_track = 0.0;
     let mut falls_so_far = 0;
     let status = loop {
-        let root = ls.world().agents[0].root_position;
+        // The world the fall rule judges in this step.
+        let judged = ls.world().agents[0];
+        let root = judged.root_position;
         let stepped = ls.step();
         // A site for each fall the run's own count gained (the count is kept per
         // instruction: a fall across an instruction's end counts in both).
@@ -295,6 +311,7 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
             ep.fall_sites.push(FallSite {
                 locomotion: forms.get(i).copied().unwrap_or(Locomotion::Walk),
                 ground: ground_kind(&scene.terrain, root[0], root[1]),
+                posture: FallPosture::of(scene, &judged),
             });
         }
         falls_so_far = falls;
@@ -386,6 +403,12 @@ mod tests {
         for s in &ep.fall_sites {
             assert_eq!(s.locomotion, Locomotion::Run);
         }
+        assert_eq!(
+            ep.fall_postures_field().split(';').count(),
+            ep.falls as usize,
+            "{}",
+            ep.fall_postures_field()
+        );
         assert!(
             ep.fall_sites.iter().any(|s| s.ground == GroundKind::Stairs),
             "{}",

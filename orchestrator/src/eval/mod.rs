@@ -11,6 +11,7 @@
 
 pub mod dynamic;
 pub mod episode;
+pub mod fall_posture;
 pub mod ground;
 pub mod plot;
 pub mod pyramid;

@@ -16,6 +16,7 @@ use plotters::style::RGBColor;
 use serde::{Deserialize, Serialize};
 
 use super::episode::{EpisodeSpec, TIME_LIMIT_EXTRA, TIME_LIMIT_FACTOR, run_episode};
+use super::fall_posture::FallPosture;
 use super::ground::GroundKind;
 use super::plot::{Bar, bars};
 use super::table::field;
@@ -125,9 +126,6 @@ pub fn tour<S: AsRef<str>>(scene: &Scene, scene_seed: u64, forms: &[S]) -> anyho
         .map_or(String::new(), |f| f.to_uppercase().chain(c).collect()))
 }
 
-/// Where the tours fell: for each form (rows) and kind of ground (columns), the
-/// tours with a fall there and, in brackets, their falls (a humanoid that falls
-/// again and again at one spot counts once among the tours).
 /// How to watch one tour again: `plamo run` on the scene by its name, with the tour's
 /// instructions, seed and time limit, gives the same trajectory as the eval's run.
 fn replay_note(runs: &Table, meta: &Meta, out: &Path) -> anyhow::Result<String> {
@@ -156,6 +154,10 @@ fn replay_note(runs: &Table, meta: &Meta, out: &Path) -> anyhow::Result<String> 
     ))
 }
 
+/// Where the tours fell: for each form (rows) and kind of ground (columns), the
+/// tours with a fall there, in parentheses their falls (a humanoid that falls again
+/// and again at one spot counts once among the tours), and in brackets the tours
+/// whose first fall was there.
 fn fall_table(runs: &Table) -> anyhow::Result<String> {
     let grounds = GroundKind::ALL;
     // Per form and ground: tours with a fall there, falls, tours whose first fall
@@ -217,7 +219,74 @@ fn fall_table(runs: &Table) -> anyhow::Result<String> {
     Ok(md)
 }
 
-const COLUMNS: [&str; 21] = [
+/// Falls by form and the body's posture at the fall (`eval::fall_posture`), from
+/// `fall_sites` and `fall_postures`; empty for a folder written before the postures
+/// were recorded.
+fn posture_table(runs: &Table) -> anyhow::Result<String> {
+    if !runs.header.iter().any(|h| h == "fall_postures") {
+        return Ok(String::new());
+    }
+    // Per form and posture: falls, and tours whose first fall was that.
+    let mut counts = BTreeMap::<(String, FallPosture), (usize, usize)>::new();
+    for r in 0..runs.rows.len() {
+        let sites = runs
+            .str(r, "fall_sites")?
+            .split(';')
+            .filter(|s| !s.is_empty());
+        let postures = runs
+            .str(r, "fall_postures")?
+            .split(';')
+            .filter(|s| !s.is_empty());
+        let (sites, postures): (Vec<_>, Vec<_>) = (sites.collect(), postures.collect());
+        if sites.len() != postures.len() {
+            bail!(
+                "row {r}: {} fall sites but {} fall postures",
+                sites.len(),
+                postures.len()
+            );
+        }
+        for (k, (site, posture)) in sites.iter().zip(&postures).enumerate() {
+            let form = site.split_once('@').map_or(*site, |(f, _)| f);
+            let posture = FallPosture::from_name(posture).ok_or_else(|| {
+                let known = FallPosture::ALL.map(FallPosture::name);
+                anyhow::anyhow!("row {r}: unknown fall posture `{posture}` (one of {known:?})")
+            })?;
+            let e = counts.entry((form.to_string(), posture)).or_default();
+            e.0 += 1;
+            e.1 += usize::from(k == 0);
+        }
+    }
+    let mut md = String::from(
+        "\nHow the body lay when the fall rule judged it fallen: falls, and [tours whose first \
+         fall it was]; rolled: pelvis roll past 0.6 rad; head-over-step: pelvis still up \
+         (0.3 m or more) and the ground under the head 0.08 m or more above the ground under \
+         the pelvis (the rule measures the head against the ground under it); forward / \
+         backward: the head ahead of / behind the pelvis (`eval::fall_posture`).\n\n| form |",
+    );
+    for p in FallPosture::ALL {
+        md.push_str(&format!(" {} |", p.name()));
+    }
+    md.push_str("\n|---|");
+    md.push_str(&"---|".repeat(FallPosture::ALL.len()));
+    md.push('\n');
+    let mut forms: Vec<String> = FORMS.iter().map(|f| f.to_string()).collect();
+    for (f, _) in counts.keys() {
+        if !forms.contains(f) {
+            forms.push(f.clone());
+        }
+    }
+    for f in forms {
+        md.push_str(&format!("| {f} |"));
+        for p in FallPosture::ALL {
+            let (n, first) = counts.get(&(f.clone(), p)).copied().unwrap_or_default();
+            md.push_str(&format!(" {n} [{first}] |"));
+        }
+        md.push('\n');
+    }
+    Ok(md)
+}
+
+const COLUMNS: [&str; 22] = [
     "job",
     "scene_seed",
     "instructions",
@@ -237,6 +306,7 @@ const COLUMNS: [&str; 21] = [
     "planned_time",
     "replans",
     "fall_sites",
+    "fall_postures",
     "digest",
     "error",
 ];
@@ -315,6 +385,7 @@ impl Experiment for RandomScenes {
             ep.planned_time.to_string(),
             ep.replans.to_string(),
             ep.fall_sites_field(),
+            ep.fall_postures_field(),
             format!("{:016x}", ep.digest),
             field(
                 ep.planning_error
@@ -392,13 +463,14 @@ impl Experiment for RandomScenes {
              Causes are assigned in this order: planning (no route at the start, or the \
              planner flagged the rest infeasible), error (a component failed), fall, collision \
              (a wall, ceiling or moving obstacle touched and the tour unfinished), timeout.\n\n\
-             ![outcomes](random.png)\n\n{}{}",
+             ![outcomes](random.png)\n\n{}{}{}",
             mean(&plen),
             mean(&ptime),
             mean(&reached),
             mean(&xy),
             mean(&z),
             fall_table(runs)?,
+            posture_table(runs)?,
             replay_note(runs, meta, out)?,
         ));
         let mut csv = Table {
@@ -522,5 +594,59 @@ mod tests {
         assert_eq!(cell(&md, "crawl", GroundKind::Stairs), "2 (3) [1]", "{md}");
         assert_eq!(cell(&md, "walk", GroundKind::Flat), "2 (2) [1]", "{md}");
         assert_eq!(cell(&md, "run", GroundKind::Slope), "0 (0) [0]", "{md}");
+    }
+
+    #[test]
+    fn the_posture_table_counts_falls_and_first_falls_and_names_a_bad_posture() {
+        let table = |postures: [&str; 3]| Table {
+            header: ["job", "fall_sites", "fall_postures"]
+                .map(String::from)
+                .to_vec(),
+            rows: [
+                "crawl@stairs;walk@flat;crawl@stairs",
+                "crawl@rough;crawl@stairs",
+                "",
+            ]
+            .iter()
+            .zip(postures)
+            .enumerate()
+            .map(|(k, (s, p))| vec![k.to_string(), s.to_string(), p.to_string()])
+            .collect(),
+        };
+        let md = posture_table(&table([
+            "head-over-step;backward;rolled",
+            "head-over-step;head-over-step",
+            "",
+        ]))
+        .unwrap();
+        let at = |form: &str, p: FallPosture| {
+            let col = FallPosture::ALL.iter().position(|q| *q == p).unwrap() + 2;
+            let row = md
+                .lines()
+                .find(|l| l.starts_with(&format!("| {form} |")))
+                .unwrap_or_else(|| panic!("no row {form} in {md}"));
+            row.split('|').nth(col).unwrap().trim().to_string()
+        };
+        assert_eq!(at("crawl", FallPosture::HeadOverStep), "3 [2]", "{md}");
+        assert_eq!(at("crawl", FallPosture::Rolled), "1 [0]", "{md}");
+        assert_eq!(at("walk", FallPosture::Backward), "1 [0]", "{md}");
+        assert_eq!(at("run", FallPosture::Forward), "0 [0]", "{md}");
+        let e = posture_table(&table(["rolled;sideways;rolled", "rolled;rolled", ""]))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`sideways`") && e.contains("head-over-step"),
+            "{e}"
+        );
+        let e = posture_table(&table(["rolled", "rolled;rolled", ""]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("3 fall sites but 1 fall postures"), "{e}");
+        // A folder from before the column: no table, no error.
+        let old = Table {
+            header: vec!["job".into(), "fall_sites".into()],
+            rows: vec![vec!["0".into(), "crawl@flat".into()]],
+        };
+        assert_eq!(posture_table(&old).unwrap(), "");
     }
 }
