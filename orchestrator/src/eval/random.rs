@@ -283,6 +283,8 @@ fn posture_table(runs: &Table) -> anyhow::Result<String> {
         }
         md.push('\n');
     }
+    // The replay note that follows starts its own paragraph.
+    md.pop();
     Ok(md)
 }
 
