@@ -16,7 +16,7 @@ use plotters::style::RGBColor;
 use serde::{Deserialize, Serialize};
 
 use super::episode::{EpisodeSpec, TIME_LIMIT_EXTRA, TIME_LIMIT_FACTOR, run_episode};
-use super::fall_posture::FallPosture;
+use super::fall_posture::{FallPosture, PELVIS_UP, ROLLED_FROM, STEP_UNDER_HEAD};
 use super::ground::GroundKind;
 use super::plot::{Bar, bars};
 use super::table::field;
@@ -256,12 +256,13 @@ fn posture_table(runs: &Table) -> anyhow::Result<String> {
             e.1 += usize::from(k == 0);
         }
     }
-    let mut md = String::from(
+    let mut md = format!(
         "\nHow the body lay when the fall rule judged it fallen: falls, and [tours whose first \
-         fall it was]; rolled: pelvis roll past 0.6 rad; head-over-step: pelvis still up \
-         (0.3 m or more) and the ground under the head 0.08 m or more above the ground under \
-         the pelvis (the rule measures the head against the ground under it); forward / \
-         backward: the head ahead of / behind the pelvis (`eval::fall_posture`).\n\n| form |",
+         fall it was]; rolled: pelvis roll past {ROLLED_FROM} rad; head-over-step: pelvis \
+         still up ({PELVIS_UP} m or more) and the ground under the head {STEP_UNDER_HEAD} m or \
+         more above the ground under the pelvis (the rule measures the head against the \
+         ground under it); forward / backward: the head ahead of / behind the pelvis \
+         (`eval::fall_posture`).\n\n| form |",
     );
     for p in FallPosture::ALL {
         md.push_str(&format!(" {} |", p.name()));
