@@ -10,9 +10,9 @@
 use plamo_interfaces::HumanoidState;
 use plamo_scenes::Scene;
 
-/// Smallest pelvis roll taken as rolled over \[rad\]: the crawl's roll feedback
-/// holds ~0.1-0.3 rad on rough ground and stairs; past 0.6 rad it did not come back in
-/// the forensic replays (RESULTS.md "Crawl", sessions 20, 23, 31).
+/// Smallest pelvis roll taken as rolled over \[rad\]: 20 of 24 crawl falls on stairs
+/// replayed in session 31 were under 0.4 rad, upright with the head over a tread;
+/// session 23 read a roll-over as past 0.8 rad (RESULTS.md "Crawl").
 pub const ROLLED_FROM: f64 = 0.6;
 /// Least rise of the ground under the head above the ground under the pelvis for a
 /// head over a step \[m\]: the random scenes' risers are 0.08-0.15 m.
