@@ -14,7 +14,7 @@ use plamo_planner::{
 };
 use plamo_scenes::{ObstacleShape, Scene};
 
-use super::fall_posture::FallPosture;
+use super::fall_posture::{FallPose, FallPosture};
 use super::ground::{GroundKind, ground_kind};
 use crate::lockstep::{InProcess, Links, Lockstep, RunError, StepStatus};
 use crate::spec::{ControllerParams, RunSpec, controller_with, default_time_limit};
@@ -151,19 +151,19 @@ impl Episode {
 
     /// The fall sites as `verb@ground;...`, a CSV-safe field.
     pub fn fall_sites_field(&self) -> String {
-        self.fall_sites
-            .iter()
-            .map(FallSite::field)
-            .collect::<Vec<_>>()
-            .join(";")
+        self.join_falls(FallSite::field)
     }
 
     /// The fall postures as `posture;...` (in the order of
     /// [`Episode::fall_sites_field`]), a CSV-safe field.
     pub fn fall_postures_field(&self) -> String {
+        self.join_falls(|s| s.posture.name().to_string())
+    }
+
+    fn join_falls(&self, each: impl Fn(&FallSite) -> String) -> String {
         self.fall_sites
             .iter()
-            .map(|s| s.posture.name())
+            .map(each)
             .collect::<Vec<_>>()
             .join(";")
     }
@@ -299,9 +299,14 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
     let mut next_track = 0.0;
     let mut falls_so_far = 0;
     let status = loop {
-        // The world the fall rule judges in this step.
-        let judged = ls.world().agents[0];
-        let root = judged.root_position;
+        // The pose the fall rule judges in this step (the body may be put back in it).
+        let a = &ls.world().agents[0];
+        let judged = FallPose {
+            root: a.root_position,
+            orientation: a.root_orientation,
+            head: a.head_position,
+        };
+        let root = judged.root;
         let stepped = ls.step();
         // A site for each fall the run's own count gained (the count is kept per
         // instruction: a fall across an instruction's end counts in both).

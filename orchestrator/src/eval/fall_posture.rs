@@ -7,7 +7,6 @@
 //! tread, while its pelvis is still at crawl height: that kind is told apart from a
 //! body that rolled over or went down forward or backward.
 
-use plamo_interfaces::HumanoidState;
 use plamo_scenes::Scene;
 
 /// Smallest pelvis roll taken as rolled over \[rad\]: 20 of 24 crawl falls on stairs
@@ -20,6 +19,17 @@ pub const STEP_UNDER_HEAD: f64 = 0.08;
 /// Least height of the pelvis above the ground under it for a body still up on its
 /// limbs \[m\]: a crawl's pelvis rides at ~0.45-0.55 m.
 pub const PELVIS_UP: f64 = 0.3;
+
+/// What the posture is read from: the humanoid's root and head (world frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FallPose {
+    /// Root (pelvis) position \[m\].
+    pub root: [f64; 3],
+    /// Root orientation as a unit quaternion (x, y, z, w).
+    pub orientation: [f64; 4],
+    /// Head position \[m\].
+    pub head: [f64; 3],
+}
 
 /// Posture at a fall, in the order it is tested.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -59,13 +69,13 @@ impl FallPosture {
         Self::ALL.into_iter().find(|p| p.name() == name)
     }
 
-    /// The posture of humanoid `s` in `scene`.
-    pub fn of(scene: &Scene, s: &HumanoidState) -> Self {
-        let [x, y, z, w] = s.root_orientation;
+    /// The posture of a humanoid in pose `s` in `scene`.
+    pub fn of(scene: &Scene, s: &FallPose) -> Self {
+        let [x, y, z, w] = s.orientation;
         // The pelvis's left axis rises with its roll, whatever its pitch.
         let left_up = 2.0 * (y * z + x * w);
         let forward = [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + z * w)];
-        let (r, h) = (s.root_position, s.head_position);
+        let (r, h) = (s.root, s.head);
         let under_root = scene.height_at(r[0], r[1]);
         if left_up.clamp(-1.0, 1.0).asin().abs() >= ROLLED_FROM {
             Self::Rolled
@@ -87,12 +97,11 @@ mod tests {
 
     /// A humanoid with its pelvis at `root` turned by `quat` (x, y, z, w) and its
     /// head at `head`.
-    fn body(root: [f64; 3], quat: [f64; 4], head: [f64; 3]) -> HumanoidState {
-        HumanoidState {
-            root_position: root,
-            root_orientation: quat,
-            head_position: head,
-            ..Default::default()
+    fn body(root: [f64; 3], quat: [f64; 4], head: [f64; 3]) -> FallPose {
+        FallPose {
+            root,
+            orientation: quat,
+            head,
         }
     }
 

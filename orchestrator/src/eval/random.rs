@@ -154,6 +154,27 @@ fn replay_note(runs: &Table, meta: &Meta, out: &Path) -> anyhow::Result<String> 
     ))
 }
 
+/// Row `r`'s `;`-separated list in column `col` (`fall_sites`, `fall_postures`).
+fn fall_list<'a>(runs: &'a Table, r: usize, col: &str) -> anyhow::Result<Vec<&'a str>> {
+    Ok(runs
+        .str(r, col)?
+        .split(';')
+        .filter(|s| !s.is_empty())
+        .collect())
+}
+
+/// A markdown table's head: `| form |` and a column per name, then the rule.
+fn table_head<'a>(md: &mut String, names: impl ExactSizeIterator<Item = &'a str>) {
+    md.push_str("| form |");
+    let n = names.len();
+    for name in names {
+        md.push_str(&format!(" {name} |"));
+    }
+    md.push_str("\n|---|");
+    md.push_str(&"---|".repeat(n));
+    md.push('\n');
+}
+
 /// Where the tours fell: for each form (rows) and kind of ground (columns), the
 /// tours with a fall there, in parentheses their falls (a humanoid that falls again
 /// and again at one spot counts once among the tours), and in brackets the tours
@@ -167,12 +188,7 @@ fn fall_table(runs: &Table) -> anyhow::Result<String> {
     let known = [FORMS[0], FORMS[1], FORMS[2], FORMS[3], "sprint"];
     for r in 0..runs.rows.len() {
         let mut seen = BTreeSet::new();
-        for (k, site) in runs
-            .str(r, "fall_sites")?
-            .split(';')
-            .filter(|s| !s.is_empty())
-            .enumerate()
-        {
+        for (k, site) in fall_list(runs, r, "fall_sites")?.into_iter().enumerate() {
             let (form, ground) = site
                 .split_once('@')
                 .ok_or_else(|| anyhow::anyhow!("row {r}: fall site `{site}` is not form@ground"))?;
@@ -197,14 +213,9 @@ fn fall_table(runs: &Table) -> anyhow::Result<String> {
         "Where the tours fell: tours with a fall in that form on that ground, (falls), and \
          [tours whose first fall, the one that failed the tour, was there]; the form is the \
          plan's, the ground is judged from the height map under the root \
-         (`eval::ground`).\n\n| form |",
+         (`eval::ground`).\n\n",
     );
-    for g in grounds {
-        md.push_str(&format!(" {} |", g.name()));
-    }
-    md.push_str("\n|---|");
-    md.push_str(&"---|".repeat(grounds.len()));
-    md.push('\n');
+    table_head(&mut md, grounds.iter().map(|g| g.name()));
     let shown = known
         .into_iter()
         .filter(|f| FORMS.contains(f) || tours.keys().any(|(k, _)| k == f));
@@ -229,15 +240,8 @@ fn posture_table(runs: &Table) -> anyhow::Result<String> {
     // Per form and posture: falls, and tours whose first fall was that.
     let mut counts = BTreeMap::<(String, FallPosture), (usize, usize)>::new();
     for r in 0..runs.rows.len() {
-        let sites = runs
-            .str(r, "fall_sites")?
-            .split(';')
-            .filter(|s| !s.is_empty());
-        let postures = runs
-            .str(r, "fall_postures")?
-            .split(';')
-            .filter(|s| !s.is_empty());
-        let (sites, postures): (Vec<_>, Vec<_>) = (sites.collect(), postures.collect());
+        let sites = fall_list(runs, r, "fall_sites")?;
+        let postures = fall_list(runs, r, "fall_postures")?;
         if sites.len() != postures.len() {
             bail!(
                 "row {r}: {} fall sites but {} fall postures",
@@ -262,14 +266,9 @@ fn posture_table(runs: &Table) -> anyhow::Result<String> {
          still up ({PELVIS_UP} m or more) and the ground under the head {STEP_UNDER_HEAD} m or \
          more above the ground under the pelvis (the rule measures the head against the \
          ground under it); forward / backward: the head ahead of / behind the pelvis \
-         (`eval::fall_posture`).\n\n| form |",
+         (`eval::fall_posture`).\n\n",
     );
-    for p in FallPosture::ALL {
-        md.push_str(&format!(" {} |", p.name()));
-    }
-    md.push_str("\n|---|");
-    md.push_str(&"---|".repeat(FallPosture::ALL.len()));
-    md.push('\n');
+    table_head(&mut md, FallPosture::ALL.iter().map(|p| p.name()));
     let mut forms: Vec<String> = FORMS.iter().map(|f| f.to_string()).collect();
     for (f, _) in counts.keys() {
         if !forms.contains(f) {
