@@ -7,6 +7,8 @@
 //! drops to the ground; the orchestrator's fall rule then sends a real reset request to
 //! the real physics, which is what is tested.
 
+mod support;
+
 use std::cell::Cell;
 use std::io::Write;
 use std::rc::Rc;
@@ -20,6 +22,7 @@ use plamo_interfaces::{
     ACTION_RESET, ACTION_TRACK, PhysicsInput, PhysicsOutput, RESET_CRAWL, RunId,
 };
 use plamo_physics::BackendKind;
+use support::run_id;
 
 /// Flat ground, a 0.6 m ceiling over x 4..10, and a crawl under it.
 const TUNNEL: &str = r#"
@@ -228,7 +231,7 @@ fn a_reset_gives_the_same_run_in_process_and_as_processes() {
     let scene = spec.load_scene().unwrap();
     // Fall early, a crawl's length before the ceiling, and run on for a few seconds.
     let (a, _) = drive(spec.in_process(&scene).unwrap(), &spec, 3.0, 9.0);
-    let run = RunId::new("fall-recovery-ipc").unwrap();
+    let run = RunId::new(&run_id("fall-recovery-ipc")).unwrap();
     let exe = std::path::Path::new(env!("CARGO_BIN_EXE_plamo"));
     let (procs, links) = ProcessRun::start(&spec, &run, exe, IpcSettings::default(), None).unwrap();
     let (b, links) = drive(links, &spec, 3.0, 9.0);

@@ -2,6 +2,8 @@
 //! per thread, as between processes): lockstep round trips, tick checks, component
 //! errors, and isolation of concurrent runs.
 
+mod support;
+
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread;
@@ -11,6 +13,7 @@ use plamo::ipc::{IpcError, IpcSettings, RemoteComponent, end_run, run_config, se
 use plamo_interfaces::{
     Component, ComponentError, ComponentKind, Outcome, RunId, ServiceNames, Tick,
 };
+use support::run_id;
 
 /// A component whose output depends on its whole input history, so a lost, repeated
 /// or reordered message changes the result.
@@ -108,7 +111,8 @@ fn start_as(run: &str, identity: &'static str) -> Started {
 
 #[test]
 fn lockstep_round_trips_match_in_process_steps() {
-    let (mut client, handle, _orch, _) = start("ipc-test-lockstep");
+    let run = run_id("ipc-test-lockstep");
+    let (mut client, handle, _orch, _) = start(&run);
     client.wait_ready(IDENTITY).unwrap();
     let mut local = Accumulator::default();
     for tick in (0..400u64).step_by(4) {
@@ -120,7 +124,7 @@ fn lockstep_round_trips_match_in_process_steps() {
     }
     client.shutdown().unwrap();
     assert_eq!(handle.join().unwrap().unwrap(), 100);
-    end("ipc-test-lockstep", client, _orch);
+    end(&run, client, _orch);
 }
 
 /// Close the orchestrator side, end the run, and check nothing of it is left on disk.
@@ -139,7 +143,8 @@ fn files_of(run: &str) -> Vec<std::path::PathBuf> {
 
 #[test]
 fn component_errors_come_back_with_their_message() {
-    let (mut client, handle, _orch, _) = start("ipc-test-errors");
+    let run = run_id("ipc-test-errors");
+    let (mut client, handle, _orch, _) = start(&run);
     client.wait_ready(IDENTITY).unwrap();
     client.call(0, &1).unwrap();
     let err = client.call(4, &666).unwrap_err();
@@ -153,13 +158,15 @@ fn component_errors_come_back_with_their_message() {
     client.call(8, &2).unwrap();
     client.shutdown().unwrap();
     handle.join().unwrap().unwrap();
-    end("ipc-test-errors", client, _orch);
+    end(&run, client, _orch);
 }
 
 #[test]
 fn concurrent_runs_with_the_same_service_names_are_isolated() {
-    let (mut a, ha, oa, _) = start("ipc-test-iso-a");
-    let (mut b, hb, ob, _) = start("ipc-test-iso-b");
+    let run_a = run_id("ipc-test-iso-a");
+    let run_b = run_id("ipc-test-iso-b");
+    let (mut a, ha, oa, _) = start(&run_a);
+    let (mut b, hb, ob, _) = start(&run_b);
     a.wait_ready(IDENTITY).unwrap();
     b.wait_ready(IDENTITY).unwrap();
     for tick in (0..80u64).step_by(4) {
@@ -171,13 +178,14 @@ fn concurrent_runs_with_the_same_service_names_are_isolated() {
     b.shutdown().unwrap();
     assert_eq!(ha.join().unwrap().unwrap(), 20);
     assert_eq!(hb.join().unwrap().unwrap(), 20);
-    end("ipc-test-iso-a", a, oa);
-    end("ipc-test-iso-b", b, ob);
+    end(&run_a, a, oa);
+    end(&run_b, b, ob);
 }
 
 #[test]
 fn a_dead_peer_is_reported_instead_of_waiting_forever() {
-    let (mut client, handle, _orch, _) = start("ipc-test-dead");
+    let run = run_id("ipc-test-dead");
+    let (mut client, handle, _orch, _) = start(&run);
     client.wait_ready(IDENTITY).unwrap();
     client.call(0, &1).unwrap();
     client.shutdown().unwrap();
@@ -185,27 +193,26 @@ fn a_dead_peer_is_reported_instead_of_waiting_forever() {
     let err = client.call(4, &1).unwrap_err();
     assert!(matches!(err, IpcError::PeerDied { tick: 4, .. }), "{err}");
     assert!(err.to_string().contains("accumulator"));
-    end("ipc-test-dead", client, _orch);
+    end(&run, client, _orch);
 }
 
 #[test]
 fn a_component_exits_when_its_orchestrator_is_gone() {
-    let (client, handle, orch, _) = start("ipc-test-orphan");
+    let run = run_id("ipc-test-orphan");
+    let (client, handle, orch, _) = start(&run);
     drop(client);
     drop(orch);
     let err = handle.join().unwrap().unwrap_err();
     assert!(matches!(err, IpcError::PeerDied { .. }), "{err}");
-    let cfg = run_config(&RunId::new("ipc-test-orphan").unwrap()).unwrap();
+    let cfg = run_config(&RunId::new(&run).unwrap()).unwrap();
     end_run(&cfg).unwrap();
-    assert_eq!(
-        files_of("ipc-test-orphan"),
-        Vec::<std::path::PathBuf>::new()
-    );
+    assert_eq!(files_of(&run), Vec::<std::path::PathBuf>::new());
 }
 
 #[test]
 fn a_component_built_for_another_run_is_refused() {
-    let (mut client, handle, orch, _) = start_as("ipc-test-mismatch", "scene pyramid, seed 9");
+    let run = run_id("ipc-test-mismatch");
+    let (mut client, handle, orch, _) = start_as(&run, "scene pyramid, seed 9");
     let err = client.wait_ready(IDENTITY).unwrap_err();
     let text = err.to_string();
     assert!(matches!(err, IpcError::Mismatch { .. }), "{text}");
@@ -215,5 +222,5 @@ fn a_component_built_for_another_run_is_refused() {
     );
     client.shutdown().unwrap();
     handle.join().unwrap().unwrap();
-    end("ipc-test-mismatch", client, orch);
+    end(&run, client, orch);
 }

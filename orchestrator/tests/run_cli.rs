@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
-use support::recorded_json;
+use support::{recorded_json, run_id};
 
 const BIN: &str = env!("CARGO_BIN_EXE_plamo");
 const ROUTE: &str = "Run from the tree to the car, then crawl to the bench";
@@ -148,7 +148,7 @@ fn same_in_both_modes(args: &[&str], run: &str) -> Output {
 #[test]
 fn in_process_and_multi_process_runs_are_bit_identical() {
     let args = ["--instructions", ROUTE, "--max-seconds", "3", "--seed", "7"];
-    let oa = same_in_both_modes(&args, "cli-test-det");
+    let oa = same_in_both_modes(&args, &run_id("cli-test-det"));
     // Another seed changes the start heading, so the trajectory.
     let c = out_dir("seed");
     let oc = run_ok(
@@ -171,11 +171,12 @@ fn mujoco_in_process_and_multi_process_runs_are_bit_identical() {
         "--seed",
         "7",
     ];
-    same_in_both_modes(&args, "cli-test-det-mujoco");
+    same_in_both_modes(&args, &run_id("cli-test-det-mujoco"));
 }
 
 #[test]
 fn two_agents_with_their_own_instructions_run_in_both_modes() {
+    let run = run_id("cli-test-two");
     let a = out_dir("two-in");
     let b = out_dir("two-multi");
     let args = [
@@ -190,7 +191,7 @@ fn two_agents_with_their_own_instructions_run_in_both_modes() {
     ];
     let oa = run_ok(&args, &a);
     let mut margs = args.to_vec();
-    margs.extend(["--processes", "--run", "cli-test-two"]);
+    margs.extend(["--processes", "--run", &run]);
     let ob = run_ok(&margs, &b);
     assert_eq!(digest(&oa), digest(&ob));
     let traj = std::fs::read_to_string(a.join("trajectory.csv")).unwrap();
@@ -200,12 +201,12 @@ fn two_agents_with_their_own_instructions_run_in_both_modes() {
     );
     let text = String::from_utf8_lossy(&oa.stdout);
     assert!(text.contains("agent 1"), "{text}");
-    assert_eq!(leftovers("cli-test-two"), Vec::<PathBuf>::new());
+    assert_eq!(leftovers(&run), Vec::<PathBuf>::new());
 }
 
 #[test]
 fn a_sigkilled_component_stops_the_run_and_leaves_no_files() {
-    let run = "cli-test-kill";
+    let run = &run_id("cli-test-kill");
     let mut orch = long_run_with_components(run, Stdio::piped());
     let (physics, _) = component_pids(run)
         .into_iter()
@@ -250,7 +251,7 @@ fn short_multi_process_run(run: &str, out: &Path, extra: &[&str]) -> Command {
 fn a_reader_that_goes_away_still_gets_the_output_folder_written() {
     // `plamo run ... | head -1`, with the reader gone before the summary: the run
     // must still write its folder and stop its components, without a panic.
-    let run = "cli-test-closed-stdout";
+    let run = &run_id("cli-test-closed-stdout");
     let out = out_dir("closed-stdout");
     let mut orch = short_multi_process_run(run, &out, &[])
         .stdout(Stdio::piped())
@@ -294,7 +295,7 @@ fn failing_run_with_fault(run: &str, fault: &str) -> String {
 
 #[test]
 fn a_crashing_component_is_named_with_its_tick() {
-    let run = "cli-test-crash";
+    let run = &run_id("cli-test-crash");
     let err = failing_run_with_fault(run, "crash@40");
     assert!(
         err.contains("physics died") && err.contains("tick 40"),
@@ -305,7 +306,7 @@ fn a_crashing_component_is_named_with_its_tick() {
 
 #[test]
 fn a_wrong_tick_is_an_error() {
-    let run = "cli-test-tick";
+    let run = &run_id("cli-test-tick");
     let err = failing_run_with_fault(run, "wrong-tick@8");
     assert!(
         err.contains("physics: expected a message for tick 12, got tick 16"),
@@ -317,7 +318,7 @@ fn a_wrong_tick_is_an_error() {
 
 #[test]
 fn components_exit_when_the_orchestrator_is_killed() {
-    let run = "cli-test-orphan";
+    let run = &run_id("cli-test-orphan");
     let mut orch = long_run_with_components(run, Stdio::null());
     std::thread::sleep(Duration::from_millis(500));
     sigkill(orch.id());
@@ -356,9 +357,10 @@ fn concurrent_runs_are_isolated() {
             .spawn()
             .unwrap()
     };
+    let (run_a, run_b) = (run_id("cli-test-conc-a"), run_id("cli-test-conc-b"));
     let (da, db) = (out_dir("conc-a"), out_dir("conc-b"));
-    let a = spawn("cli-test-conc-a", "1", &da);
-    let b = spawn("cli-test-conc-b", "2", &db);
+    let a = spawn(&run_a, "1", &da);
+    let b = spawn(&run_b, "2", &db);
     let oa = a.wait_with_output().unwrap();
     let ob = b.wait_with_output().unwrap();
     let ra = run_ok(
@@ -372,8 +374,8 @@ fn concurrent_runs_are_isolated() {
     assert_eq!(digest(&oa), digest(&ra));
     assert_eq!(digest(&ob), digest(&rb));
     assert_ne!(digest(&oa), digest(&ob));
-    assert_eq!(leftovers("cli-test-conc-a"), Vec::<PathBuf>::new());
-    assert_eq!(leftovers("cli-test-conc-b"), Vec::<PathBuf>::new());
+    assert_eq!(leftovers(&run_a), Vec::<PathBuf>::new());
+    assert_eq!(leftovers(&run_b), Vec::<PathBuf>::new());
 }
 
 #[cfg(not(feature = "mujoco"))]
@@ -389,7 +391,8 @@ fn mujoco_without_the_feature_names_the_feature() {
 
 #[test]
 fn the_next_run_removes_what_a_crashed_run_of_another_id_left() {
-    let run = "cli-test-crashed";
+    let run = &run_id("cli-test-crashed");
+    let after = &run_id("cli-test-after-crashed");
     let mut orch = long_run_with_components(run, Stdio::null());
     std::thread::sleep(Duration::from_millis(500));
     // The whole run dies at once (a power cut, `kill -9` of the process group):
@@ -420,14 +423,14 @@ fn the_next_run_removes_what_a_crashed_run_of_another_id_left() {
             "1",
             "--processes",
             "--run",
-            "cli-test-after-crashed",
+            after,
         ],
         &out_dir("after-crashed"),
     );
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("crashed run `cli-test-crashed`"), "{err}");
+    assert!(err.contains(&format!("crashed run `{run}`")), "{err}");
     assert_eq!(leftovers(run), Vec::<PathBuf>::new());
-    assert_eq!(leftovers("cli-test-after-crashed"), Vec::<PathBuf>::new());
+    assert_eq!(leftovers(after), Vec::<PathBuf>::new());
 }
 
 /// Simulated seconds and loop wall seconds from a run's summary.
@@ -514,7 +517,7 @@ fn attach(run: &str, extra: &[&str]) -> (Child, Vec<String>, std::thread::JoinHa
 
 #[test]
 fn components_started_by_hand_attach_to_the_run() {
-    let run = "cli-test-attach";
+    let run = &run_id("cli-test-attach");
     let args = ["--instructions", ROUTE, "--max-seconds", "1", "--seed", "5"];
     let (orch, commands, rest) = attach(run, &args);
     // Exactly what a user would paste into three terminals.
@@ -545,7 +548,7 @@ fn components_started_by_hand_attach_to_the_run() {
 
 #[test]
 fn a_component_started_for_another_run_is_refused() {
-    let run = "cli-test-attach-wrong";
+    let run = &run_id("cli-test-attach-wrong");
     let (orch, commands, rest) = attach(
         run,
         &[
@@ -710,7 +713,7 @@ fn parameter_files_from_tune_drive_the_controller_in_both_modes() {
     file_drives_the_run(
         "--gait-params",
         &file,
-        "cli-test-params",
+        &run_id("cli-test-params"),
         &out_dir("params-built-in"),
     );
     // A file that is not there, or not a crawl file, is named.
@@ -728,7 +731,7 @@ fn a_physics_parameter_file_drives_the_physics_in_both_modes() {
     file_drives_the_run(
         "--physics-params",
         &file,
-        "cli-test-physics-params",
+        &run_id("cli-test-physics-params"),
         &out_dir("physics-params-built-in"),
     );
     // A misspelt field, a value out of range, a file that is not there: each named.
@@ -823,7 +826,7 @@ fn a_planner_parameter_file_drives_the_planner_in_both_modes() {
     file_drives_the_run(
         "--planner-params",
         &file,
-        "cli-test-planner-params",
+        &run_id("cli-test-planner-params"),
         &built_in_dir,
     );
     let slow_dir = out_dir("planner-params-slow");

@@ -1,5 +1,8 @@
 //! Shared by the orchestrator's integration tests.
 
+// Each test binary compiles this module and uses a part of it.
+#![allow(dead_code)]
+
 use std::ffi::OsStr;
 use std::ops::Deref;
 use std::path::Path;
@@ -19,8 +22,13 @@ pub fn out_dir(tag: &str, name: &str) -> OutDir {
     )
 }
 
+/// A run id of this test process's own: two test runs on one machine at once (two
+/// clones, two CI jobs) must not open each other's shared memory.
+pub fn run_id(name: &str) -> String {
+    format!("{name}-{}", std::process::id())
+}
+
 /// A JSON file a run recorded into `out`.
-#[allow(dead_code)] // not every test file reads what a run recorded
 pub fn recorded_json(out: &Path, file: &str) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(out.join(file)).unwrap()).unwrap()
 }
