@@ -155,7 +155,10 @@ fn main() {
         for r in 0..rounds {
             let a = in_process(&spec, max_seconds);
             for (i, (_, settings)) in variants.iter().enumerate() {
-                let t = processes(&spec, max_seconds, *settings, &format!("bench{i}"));
+                // The pid keeps a benchmark clear of a test suite or another benchmark
+                // running on the machine at the same time.
+                let run = format!("bench{i}-{}", std::process::id());
+                let t = processes(&spec, max_seconds, *settings, &run);
                 assert_eq!(t.digest, a.digest, "round {r}: multi-process run differs");
                 ratios[i + 1].push(t.wall / a.wall);
                 timings[i + 1].push(t);
