@@ -6,6 +6,9 @@
 //!
 //! `cargo bench -p plamo --features mujoco --bench processes [-- ROUNDS [MAX_SECONDS]]`
 
+#[path = "../tests/support/mod.rs"]
+mod support;
+
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -155,9 +158,7 @@ fn main() {
         for r in 0..rounds {
             let a = in_process(&spec, max_seconds);
             for (i, (_, settings)) in variants.iter().enumerate() {
-                // The pid keeps a benchmark clear of a test suite or another benchmark
-                // running on the machine at the same time.
-                let run = format!("bench{i}-{}", std::process::id());
+                let run = support::run_id(&format!("bench{i}"));
                 let t = processes(&spec, max_seconds, *settings, &run);
                 assert_eq!(t.digest, a.digest, "round {r}: multi-process run differs");
                 ratios[i + 1].push(t.wall / a.wall);

@@ -306,7 +306,6 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
             orientation: a.root_orientation,
             head: a.head_position,
         };
-        let root = judged.root;
         let stepped = ls.step();
         // A site for each fall the run's own count gained (the count is kept per
         // instruction: a fall across an instruction's end counts in both).
@@ -315,7 +314,7 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
         for _ in falls_so_far..falls {
             ep.fall_sites.push(FallSite {
                 locomotion: forms.get(i).copied().unwrap_or(Locomotion::Walk),
-                ground: ground_kind(&scene.terrain, root[0], root[1]),
+                ground: ground_kind(&scene.terrain, judged.root[0], judged.root[1]),
                 posture: FallPosture::of(scene, &judged),
             });
         }

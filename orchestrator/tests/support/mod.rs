@@ -1,4 +1,4 @@
-//! Shared by the orchestrator's integration tests.
+//! Shared by the orchestrator's integration tests and benchmarks.
 
 // Each test binary compiles this module and uses a part of it.
 #![allow(dead_code)]
@@ -22,8 +22,8 @@ pub fn out_dir(tag: &str, name: &str) -> OutDir {
     )
 }
 
-/// A run id of this test process's own: two test runs on one machine at once (two
-/// clones, two CI jobs) must not open each other's shared memory.
+/// A run id of this process's own: two test runs or benchmarks on one machine at
+/// once (two clones, two CI jobs) must not open each other's shared memory.
 pub fn run_id(name: &str) -> String {
     format!("{name}-{}", std::process::id())
 }
