@@ -43,6 +43,10 @@ pub const REACH_ROWS: usize = 5;
 pub const REACH_FIRST_ROW: f64 = 4.5;
 /// Samples in [`Observation::reach_map`].
 pub const REACH_SAMPLES: usize = REACH_ROWS * LOCAL_MAP_SIDE;
+/// How close a top's footprint comes to the root for [`Observation::headroom`] to
+/// count it \[m\]: a crawling body's head and shoulders are 0.4-0.6 m ahead of its
+/// root, and the body needs a stride to settle lower before its back reaches the top.
+pub const HEADROOM_REACH: f64 = 1.0;
 
 /// The humanoid state the controller reads, world frame (Z up, metres, radians).
 ///
@@ -195,6 +199,13 @@ pub struct Observation {
     /// [`Observation::update_with_map`] has no scene and repeats the map's front row
     /// (the ground goes on as at the map's edge).
     pub reach_map: [f64; REACH_SAMPLES],
+    /// Lowest free height under the tops (ceilings) whose footprint comes within
+    /// [`HEADROOM_REACH`] of the root, over the ground under the root \[m\];
+    /// `f64::INFINITY` with none that near (not flattened: the paper's policy reads the
+    /// room it has from the plan's head height; kept so a model-based crawl keeps its
+    /// back low under a top and can sit higher in the open). [`Observation::update`]
+    /// reads the scene; [`Observation::update_with_map`] has no scene and sets open sky.
+    pub headroom: f64,
     /// Head position relative to the root, heading frame \[m\] (not flattened: it is
     /// one of `body_pos`; kept so policies need not know the head's body index).
     pub head_pos: [f64; 3],
@@ -220,6 +231,7 @@ impl Observation {
             waypoint_ground: [0.0; NUM_WAYPOINTS],
             height_map: [0.0; LOCAL_MAP_SAMPLES],
             reach_map: [0.0; REACH_SAMPLES],
+            headroom: f64::INFINITY,
             head_pos: [0.0; 3],
             heading: 0.0,
         }
@@ -247,6 +259,9 @@ impl Observation {
             *g = scene.height_at(w.x, w.y) - ground;
         }
         scene.local_heights_into(x, y, heading, ground, REACH_FIRST_ROW, &mut self.reach_map);
+        self.headroom = scene
+            .headroom_near(x, y, HEADROOM_REACH)
+            .unwrap_or(f64::INFINITY);
         Ok(())
     }
 
@@ -296,6 +311,7 @@ impl Observation {
         for row in self.reach_map.chunks_exact_mut(LOCAL_MAP_SIDE) {
             row.copy_from_slice(front);
         }
+        self.headroom = f64::INFINITY;
         Ok(())
     }
 
@@ -456,6 +472,27 @@ mod tests {
         for r in 0..REACH_ROWS {
             assert_eq!(row(&obs, r), &map[LOCAL_MAP_SAMPLES - LOCAL_MAP_SIDE..]);
         }
+    }
+
+    #[test]
+    fn headroom_counts_the_tops_within_reach_of_the_root() {
+        // The bench's 0.6 m top spans x 2.5-4.5 m.
+        let scene = crate::rollout::ceiling_scene(8.0);
+        let mut obs = Observation::new(LAYOUT);
+        let mut at = |x: f64| {
+            let p = [x, 0.0];
+            obs.update(&snapshot(0.0, p), &plan(0.0, p), &scene).unwrap();
+            obs.headroom
+        };
+        assert_eq!(at(3.5), 0.6);
+        assert_eq!(at(2.5 - HEADROOM_REACH + 0.05), 0.6);
+        assert_eq!(at(2.5 - HEADROOM_REACH - 0.05), f64::INFINITY);
+        assert_eq!(at(4.5 + HEADROOM_REACH + 0.05), f64::INFINITY);
+        // Without a scene: open sky.
+        let p = [3.5, 0.0];
+        obs.update_with_map(&snapshot(0.0, p), &plan(0.0, p), 0.0, &[0.0; LOCAL_MAP_SAMPLES])
+            .unwrap();
+        assert_eq!(obs.headroom, f64::INFINITY);
     }
 
     #[test]

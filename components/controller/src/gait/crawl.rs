@@ -265,6 +265,16 @@ pub struct CrawlParams {
     /// on any ground, as before.
     #[serde(default)]
     pub slope_pitch: f64,
+    /// Pelvis pitch under a low top \[rad\] (see `top_below`): the body's back stays
+    /// low where a ceiling is near and the crawl may sit higher (a smaller
+    /// `pelvis_pitch`) in the open. Unused while `top_below` is 0.
+    #[serde(default)]
+    pub top_pitch: f64,
+    /// Free height under a top within reach of the root (`Observation::headroom`)
+    /// below which the body takes `top_pitch` instead of `pelvis_pitch` \[m\], blended
+    /// over `TOP_FILTER`. 0: `pelvis_pitch` everywhere, as before.
+    #[serde(default)]
+    pub top_below: f64,
     /// Least height of the nominal head above the ground under it \[m\] (the head's
     /// centre; the fall rule's bar is 0.2 m, a level crawl's head is ~0.35 m up): the
     /// head is ~0.5 m ahead of the pelvis, beyond the height map, so the ground under
@@ -557,7 +567,9 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 77] = [
+        let ranges: [(&'static str, f64, f64, f64); 79] = [
+            ("top_pitch", self.top_pitch, -0.5, 1.5),
+            ("top_below", self.top_below, 0.0, 3.0),
             ("turn_slowdown", self.turn_slowdown, 0.0, 10.0),
             ("up_level", self.up_level, 0.0, 5.0),
             ("roll_torque_extra", self.roll_torque_extra, 0.0, 200.0),
@@ -930,6 +942,9 @@ pub(crate) struct CrawlGait {
     /// Low-passed rise of the ground under the contacts \[rad\], 0 downhill (see
     /// `slope_pitch`; stays 0 without it).
     slope: f64,
+    /// Low-passed share of `top_pitch` in the body's pitch, 0-1 (see `top_below`);
+    /// `None` until the first step after a reset, which takes it as it is.
+    under_top: Option<f64>,
     /// The plan's path behind its first waypoint (see `pursuit`).
     trace: PlanTrace,
     /// Body masses over the total mass, for the centre of mass \[-\].
@@ -941,6 +956,11 @@ pub(crate) struct CrawlGait {
 /// `slope_pitch`) \[s\]: a hand crossing a stair's nose changes the slope between
 /// knees and hands at once; the trunk follows over a stride.
 const SLOPE_FILTER: f64 = 0.3;
+
+/// Time constant of the blend between `pelvis_pitch` and `top_pitch` (see
+/// `top_below`) \[s\]: at the crawl's 0.7 m/s the body settles over ~0.2 m, inside
+/// `HEADROOM_REACH`'s 1 m before its back reaches the top.
+const TOP_FILTER: f64 = 0.3;
 
 /// Largest drop of the hands' targets for a sinking head (`head_push`) \[m\]: the
 /// arms are straight a little beyond it.
@@ -983,6 +1003,7 @@ impl CrawlGait {
             aligning: false,
             rough: 0.0,
             slope: 0.0,
+            under_top: None,
             trace: PlanTrace::default(),
             mass_fraction: mass_fractions(),
             last_wrench: RootWrench::default(),
@@ -1053,17 +1074,25 @@ impl CrawlGait {
         }
     }
 
-    /// The desired body frame: `pelvis_pitch`, less the share `slope_pitch` of the
-    /// ground's rise.
+    /// The desired body frame: the level pitch (`base_pitch`), less the share
+    /// `slope_pitch` of the ground's rise.
     fn frame(&self, ground: &Ground) -> Frame {
         let p = &self.params;
-        self.frame_at(ground, p.pelvis_pitch - p.slope_pitch * self.slope)
+        self.frame_at(ground, self.base_pitch() - p.slope_pitch * self.slope)
+    }
+
+    /// The pelvis pitch on level ground \[rad\]: `pelvis_pitch`, or towards
+    /// `top_pitch` under a low top.
+    fn base_pitch(&self) -> f64 {
+        let p = &self.params;
+        let share = self.under_top.unwrap_or(0.0);
+        p.pelvis_pitch + share * (p.top_pitch - p.pelvis_pitch)
     }
 
     /// Forward slope angle of the ground from the knees' nominal contacts to the
-    /// hands' \[rad\], uphill positive, for the body at `pelvis_pitch`.
+    /// hands' \[rad\], uphill positive, for the body at its level pitch.
     fn ground_slope(&self, ground: &Ground) -> f64 {
-        let n = self.nominal(&self.frame_at(ground, self.params.pelvis_pitch));
+        let n = self.nominal(&self.frame_at(ground, self.base_pitch()));
         let mid = |a: [f64; 2], b: [f64; 2]| {
             let h = 0.5 * (ground.at(a[0], a[1]) + ground.at(b[0], b[1]));
             (0.5 * (a[0] + b[0]), h)
@@ -1346,6 +1375,12 @@ impl CrawlGait {
             v_plan[1] = v_plan[1].clamp(-p.max_side_speed, p.max_side_speed);
         }
         let ground = Ground::new(obs, p.ground_ahead, p.reach_map);
+        if p.top_below > 0.0 {
+            let target = if obs.headroom < p.top_below { 1.0 } else { 0.0 };
+            let a = (CONTROL_DT / TOP_FILTER).min(1.0);
+            let share = self.under_top.map_or(target, |s| s + a * (target - s));
+            self.under_top = Some(share);
+        }
         if p.slope_pitch > 0.0 {
             let a = (CONTROL_DT / SLOPE_FILTER).min(1.0);
             self.slope += a * (self.ground_slope(&ground).max(0.0) - self.slope);
@@ -1607,6 +1642,7 @@ impl CrawlGait {
         self.aligning = false;
         self.rough = 0.0;
         self.slope = 0.0;
+        self.under_top = None;
         self.trace.clear();
     }
 }
@@ -2374,6 +2410,46 @@ mod tests {
             "up {up} (level {level})"
         );
         assert_eq!(pitch(on, false), level);
+    }
+
+    #[test]
+    fn the_body_takes_top_pitch_under_a_low_top_only() {
+        let params = CrawlParams {
+            pelvis_pitch: 0.5,
+            top_pitch: 0.6,
+            top_below: 0.75,
+            slope_pitch: 0.0,
+            ..CrawlParams::default()
+        };
+        let mut obs = crawling_obs();
+        let mut gait = crawling_gait(params);
+        let mut out = Action::default();
+        let mut run = |gait: &mut CrawlGait, headroom: f64, seconds: f64| {
+            obs.headroom = headroom;
+            for _ in 0..(seconds / CONTROL_DT).round() as usize {
+                gait.act(&obs, &mut out);
+            }
+            gait.frame(&Ground::new(&obs, params.ground_ahead, params.reach_map))
+                .pelvis_pitch
+        };
+        assert_eq!(run(&mut gait, f64::INFINITY, 1.0), 0.5);
+        // A top with room to spare changes nothing.
+        assert_eq!(run(&mut gait, 0.9, 1.0), 0.5);
+        // A low one: the pitch moves over a few strides, not at once.
+        let first = run(&mut gait, 0.6, CONTROL_DT);
+        assert!(first > 0.5 && first < 0.53, "{first}");
+        assert!((run(&mut gait, 0.6, 3.0) - 0.6).abs() < 1e-3);
+        // Out again, back to the open pitch.
+        assert!((run(&mut gait, f64::INFINITY, 3.0) - 0.5).abs() < 1e-3);
+        // Reset (a fall put back) under the top: the low pitch at once.
+        gait.reset();
+        assert_eq!(run(&mut gait, 0.6, CONTROL_DT), 0.6);
+        // Off (`top_below` 0): `pelvis_pitch` under any top.
+        let mut off = crawling_gait(CrawlParams {
+            top_below: 0.0,
+            ..params
+        });
+        assert_eq!(run(&mut off, 0.6, 1.0), 0.5);
     }
 
     #[test]
