@@ -481,7 +481,8 @@ mod tests {
         let mut obs = Observation::new(LAYOUT);
         let mut at = |x: f64| {
             let p = [x, 0.0];
-            obs.update(&snapshot(0.0, p), &plan(0.0, p), &scene).unwrap();
+            obs.update(&snapshot(0.0, p), &plan(0.0, p), &scene)
+                .unwrap();
             obs.headroom
         };
         assert_eq!(at(3.5), 0.6);
@@ -490,8 +491,13 @@ mod tests {
         assert_eq!(at(4.5 + HEADROOM_REACH + 0.05), f64::INFINITY);
         // Without a scene: open sky.
         let p = [3.5, 0.0];
-        obs.update_with_map(&snapshot(0.0, p), &plan(0.0, p), 0.0, &[0.0; LOCAL_MAP_SAMPLES])
-            .unwrap();
+        obs.update_with_map(
+            &snapshot(0.0, p),
+            &plan(0.0, p),
+            0.0,
+            &[0.0; LOCAL_MAP_SAMPLES],
+        )
+        .unwrap();
         assert_eq!(obs.headroom, f64::INFINITY);
     }
 
