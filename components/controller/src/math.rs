@@ -62,6 +62,12 @@ pub(crate) fn ramp_past(x: f64, from: f64) -> f64 {
     }
 }
 
+/// One step of a first-order low-pass: `x` moved towards `target` by `dt / tau` of the
+/// gap (all of it once `dt >= tau`).
+pub(crate) fn low_pass(x: f64, target: f64, dt: f64, tau: f64) -> f64 {
+    x + (dt / tau).min(1.0) * (target - x)
+}
+
 /// Wraps an angle into (-pi, pi].
 pub(crate) fn wrap_angle(a: f64) -> f64 {
     let mut a = (a + PI).rem_euclid(2.0 * PI) - PI;

@@ -64,7 +64,7 @@ use super::plan_ground::PlanGround;
 use super::plan_trace::PlanTrace;
 use super::{com_over_feet, mass_fractions, residual_force, residual_wrench};
 use crate::error::{ControllerError, Result};
-use crate::math::{ramp_past, smoothstep, sub3, wrap_angle};
+use crate::math::{low_pass, ramp_past, smoothstep, sub3, wrap_angle};
 use crate::observation::{Observation, REACH_FIRST_ROW, REACH_ROWS, WAYPOINT_SPACING};
 use crate::policy::{Action, RootWrench};
 use crate::settings::{ControllerSettings, GRAVITY};
@@ -1330,7 +1330,7 @@ impl CrawlGait {
         let wp0 = obs.waypoints[0];
         let wp1 = obs.waypoints[1];
         let share = MapPlane::rough_share(&obs.height_map, p.rough_step);
-        self.rough += (CONTROL_DT / p.rough_filter).min(1.0) * (share - self.rough);
+        self.rough = low_pass(self.rough, share, CONTROL_DT, p.rough_filter);
         let top = p.max_speed + self.rough * (p.rough_speed.min(p.max_speed) - p.max_speed);
         let vmax = (1.15 * obs.waypoint_speeds[0].max(0.0) + 0.2).min(top);
         let mut v_plan = [wp0[0] / WAYPOINT_SPACING, wp0[1] / WAYPOINT_SPACING];
@@ -1377,13 +1377,14 @@ impl CrawlGait {
         let ground = Ground::new(obs, p.ground_ahead, p.reach_map);
         if p.top_below > 0.0 {
             let target = if obs.headroom < p.top_below { 1.0 } else { 0.0 };
-            let a = (CONTROL_DT / TOP_FILTER).min(1.0);
-            let share = self.under_top.map_or(target, |s| s + a * (target - s));
+            let share = self
+                .under_top
+                .map_or(target, |s| low_pass(s, target, CONTROL_DT, TOP_FILTER));
             self.under_top = Some(share);
         }
         if p.slope_pitch > 0.0 {
-            let a = (CONTROL_DT / SLOPE_FILTER).min(1.0);
-            self.slope += a * (self.ground_slope(&ground).max(0.0) - self.slope);
+            let rise = self.ground_slope(&ground).max(0.0);
+            self.slope = low_pass(self.slope, rise, CONTROL_DT, SLOPE_FILTER);
         }
         let f = self.frame(&ground);
         let nominal = self.nominal(&f);
@@ -1480,9 +1481,9 @@ impl CrawlGait {
                     *c += (want - *c).clamp(-dv, dv);
                 }
                 let yaw_rate = (p.yaw_gain * heading_err).clamp(-p.max_yaw_rate, p.max_yaw_rate);
-                let a = (CONTROL_DT / p.vel_filter).min(1.0);
                 for k in 0..2 {
-                    self.v_filt[k] += a * ([vx, vy][k] - self.v_filt[k]);
+                    self.v_filt[k] =
+                        low_pass(self.v_filt[k], [vx, vy][k], CONTROL_DT, p.vel_filter);
                     self.v_slip[k] = (self.v_slip[k]
                         + p.slip_gain * (self.v_cmd[k] - self.v_filt[k]) * CONTROL_DT)
                         .clamp(-p.max_slip, p.max_slip);
