@@ -376,3 +376,79 @@ fn assert_replays(line: &str, cwd: Option<&Path>, dir: &Path, digest: &str) {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+/// A copy of sweep folder `from` in `to` whose row `row` has outcome `cause`.
+fn with_cause(from: &Path, to: &Path, row: usize, cause: &str) {
+    std::fs::create_dir_all(to).unwrap();
+    for (name, bytes) in files(from) {
+        std::fs::write(to.join(name), bytes).unwrap();
+    }
+    let mut runs = read_runs(from);
+    let c = runs.col("cause").unwrap();
+    runs.rows[row][c] = cause.into();
+    std::fs::write(to.join("runs.csv"), runs.to_csv()).unwrap();
+}
+
+#[test]
+fn compare_pairs_two_random_sweeps_tour_by_tour() {
+    let base = tmp("cmp-base");
+    eval::run(
+        &RandomScenes::new(3, 11, &[]).unwrap(),
+        &opts(&base, 1, Shard::ALL),
+    )
+    .unwrap();
+    let runs = read_runs(&base);
+    let seed = |r: usize| runs.str(r, "scene_seed").unwrap().to_string();
+    // Runs of 1 s reach no landmark: no tour succeeds. Mark one a success in a copy.
+    assert!((0..3).all(|r| runs.str(r, "cause").unwrap() != "success"));
+    let won = tmp("cmp-won");
+    with_cause(&base, &won, 1, "success");
+    let md = eval::compare::compare(&base, &won, None).unwrap();
+    assert!(md.contains("3 tours paired"), "{md}");
+    assert!(md.contains("Gained 1 ") && md.contains("lost 0,"), "{md}");
+    assert!(md.contains(&format!("Gained seeds: {}.", seed(1))), "{md}");
+    assert!(
+        md.contains("Identical trajectories (digest): 3 of 3"),
+        "{md}"
+    );
+    // The other way round the tour is lost; the exact test of 1 discordant tour is 1.
+    let md = eval::compare::compare(&won, &base, None).unwrap();
+    assert!(md.contains("Gained 0 ") && md.contains("lost 1,"), "{md}");
+    assert!(md.contains("p = 1.000"), "{md}");
+
+    // The command line writes compare.md.
+    let out = tmp("cmp-out");
+    let o = Command::new(env!("CARGO_BIN_EXE_plamo"))
+        .args(["eval", "compare"])
+        .args([base.as_os_str(), won.as_os_str()])
+        .arg("--out")
+        .arg(out.as_os_str())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let written = std::fs::read_to_string(out.join("compare.md")).unwrap();
+    assert!(written.contains("Gained 1 "), "{written}");
+
+    // Tours that are not the same tour, other experiments and disjoint seeds: refused
+    // by name.
+    let crawls = tmp("cmp-crawl");
+    let crawl_only = RandomScenes::new(3, 11, &["crawl".to_string()]).unwrap();
+    eval::run(&crawl_only, &opts(&crawls, 1, Shard::ALL)).unwrap();
+    let err = eval::compare::compare(&base, &crawls, None).unwrap_err();
+    assert!(err.to_string().contains("--forms"), "{err}");
+    let later = tmp("cmp-later");
+    eval::run(
+        &RandomScenes::new(2, 40, &[]).unwrap(),
+        &opts(&later, 1, Shard::ALL),
+    )
+    .unwrap();
+    let err = eval::compare::compare(&base, &later, None).unwrap_err();
+    assert!(err.to_string().contains("share no scene seed"), "{err}");
+    let slalom = tmp("cmp-slalom");
+    eval::run(&tiny_slalom(), &opts(&slalom, 1, Shard::ALL)).unwrap();
+    let err = eval::compare::compare(&base, &slalom, None).unwrap_err();
+    assert!(
+        err.to_string().contains("compare pairs `random` sweeps"),
+        "{err}"
+    );
+}

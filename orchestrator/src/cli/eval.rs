@@ -5,7 +5,7 @@
 //! paper's, fall rate and residual; writes markdown and a bar plot.
 //!
 //! The paper's other experiments (`slalom`, `pyramid`, `random`, `dynamic`) and
-//! `merge` live in [`plamo::eval`]; here are only their arguments.
+//! `merge` and `compare` live in [`plamo::eval`]; here are only their arguments.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -45,6 +45,9 @@ pub enum EvalCommand {
     /// Combine the shard folders of one sweep (`--shard i/n`) into one result, or
     /// summarize one whole-sweep folder again.
     Merge(MergeArgs),
+    /// Pair two random-scene sweeps tour by tour (same seeds): gained and lost tours,
+    /// exact McNemar test, identical trajectories, outcomes and first falls.
+    Compare(CompareArgs),
 }
 
 /// Arguments every experiment sweep takes.
@@ -197,6 +200,18 @@ pub struct MergeArgs {
     out: PathBuf,
 }
 
+/// Arguments of `plamo eval compare`.
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// Folder of the base sweep (`plamo eval random --out`).
+    base: PathBuf,
+    /// Folder of the sweep compared against it.
+    new: PathBuf,
+    /// Folder to write `compare.md` into (created); default: print only.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
 fn report(md: anyhow::Result<String>, out: &std::path::Path) -> anyhow::Result<ExitCode> {
     say!("{}", md?);
     say!("wrote {}", out.display());
@@ -293,6 +308,14 @@ pub fn run(cmd: EvalCommand) -> anyhow::Result<ExitCode> {
         EvalCommand::Random(a) => sweep(&RandomScenes::new(a.scenes, a.seed, &a.forms)?, &a.sweep),
         EvalCommand::Dynamic(a) => sweep(&Dynamic::new(a.scenes, a.seed)?, &a.sweep),
         EvalCommand::Merge(a) => report(eval::merge(&a.dirs, &a.out), &a.out),
+        EvalCommand::Compare(a) => {
+            let md = eval::compare::compare(&a.base, &a.new, a.out.as_deref())?;
+            say!("{md}");
+            if let Some(out) = &a.out {
+                say!("wrote {}", out.join("compare.md").display());
+            }
+            Ok(ExitCode::SUCCESS)
+        }
     }
 }
 
