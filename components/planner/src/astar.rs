@@ -121,12 +121,17 @@ fn step_length(g: &PlanGrid, d: usize) -> f64 {
     }
 }
 
-/// Extra cost of a crawled step from `a` to `b` (direction `DIRS[d]`) over uneven
-/// ground: its length times `crawl_relief_cost` times the relief at both ends
-/// (mean) \[m\].
+/// Extra cost of a step from `a` to `b` (direction `DIRS[d]`) over uneven ground:
+/// its length times `crawl_relief_cost` (crawled) or `stand_relief_cost` (not)
+/// times the relief at both ends (mean) \[m\].
 #[inline]
-pub(crate) fn relief_cost(g: &PlanGrid, a: usize, b: usize, d: usize) -> f64 {
-    step_length(g, d) * g.relief_cost * 0.5 * (g.relief[a] + g.relief[b]) as f64
+pub(crate) fn relief_cost(g: &PlanGrid, crawled: bool, a: usize, b: usize, d: usize) -> f64 {
+    let per_metre = if crawled {
+        g.relief_cost
+    } else {
+        g.stand_relief_cost
+    };
+    step_length(g, d) * per_metre * 0.5 * (g.relief[a] + g.relief[b]) as f64
 }
 
 /// Extra cost of a step from `a` to `b` (direction `DIRS[d]`) where a top makes a
@@ -343,8 +348,9 @@ impl AStar {
                 // A finite cost implies the neighbour is on the grid.
                 let b = c.wrapping_add_signed(offsets[d]);
                 let mut gb = gc + w as f64;
-                if g.has_relief && crawl_applies(g, limits.crawl_body, c, b) {
-                    gb += relief_cost(g, c, b, d);
+                if g.has_relief {
+                    let crawled = crawl_applies(g, limits.crawl_body, c, b);
+                    gb += relief_cost(g, crawled, c, b, d);
                 }
                 if g.has_head_cost {
                     gb += head_cost(g, limits.posture, c, b, d);

@@ -56,6 +56,8 @@ pub struct PlanGrid {
     pub has_relief: bool,
     /// `PlannerSettings::crawl_relief_cost` \[1/m\].
     pub relief_cost: f64,
+    /// `PlannerSettings::stand_relief_cost` \[1/m\].
+    pub stand_relief_cost: f64,
     /// Extra cost per metre of path \[1\] where a top makes a leg lower its head
     /// below its form's (`PlannerSettings::crawl_zone_cost`, `stoop_zone_cost`),
     /// by [`Posture`](crate::Posture): index 0 a crouch-walk leg, 1 a standing
@@ -396,7 +398,8 @@ impl PlanGrid {
                 relief[j * nx + i] = (h - l) as f32;
             }
         }
-        let has_relief = s.crawl_relief_cost > 0.0 && relief.iter().any(|&r| r > 0.0);
+        let has_relief = (s.crawl_relief_cost > 0.0 || s.stand_relief_cost > 0.0)
+            && relief.iter().any(|&r| r > 0.0);
         let mut edges = vec![[f32::INFINITY; 8]; n];
         let tan_max_slope = s.max_slope.tan();
         for (d, &(di, dj)) in DIRS[..4].iter().enumerate() {
@@ -467,6 +470,7 @@ impl PlanGrid {
             relief,
             has_relief,
             relief_cost: s.crawl_relief_cost,
+            stand_relief_cost: s.stand_relief_cost,
             head_cost,
             has_head_cost,
             headroom,

@@ -104,8 +104,8 @@ impl RefineCtx<'_> {
         !too_steep(tan_max_slope, line(-m, 0), step) && !too_steep(tan_max_slope, line(0, m), step)
     }
 
-    /// Extra cost per metre of crawling over uneven ground in cell `c` (see
-    /// [`PlannerSettings::crawl_relief_cost`]), 0 where the character walks.
+    /// Extra cost per metre over uneven ground in cell `c` (see
+    /// [`PlannerSettings::crawl_relief_cost`] and `stand_relief_cost`).
     fn relief_at(&self, c: Option<usize>) -> f64 {
         let g = self.grid;
         if !g.has_relief {
@@ -119,11 +119,12 @@ impl RefineCtx<'_> {
             CrawlBody::Zone => g.crawl_zone[c],
             CrawlBody::Everywhere => true,
         };
-        if applies {
-            g.relief_cost * g.relief[c] as f64
+        let per_metre = if applies {
+            g.relief_cost
         } else {
-            0.0
-        }
+            g.stand_relief_cost
+        };
+        per_metre * g.relief[c] as f64
     }
 
     /// Cost of the straight segment a-b with the A* edge cost, or `None` if it leaves

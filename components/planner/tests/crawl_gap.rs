@@ -183,11 +183,12 @@ fn step_scene() -> Scene {
     }
 }
 
-/// Mean distance of the path from the step's edge over its middle (y in 6..14) \[m\].
-fn mean_edge_distance(settings: PlannerSettings) -> f64 {
+/// Mean distance of the path of `form` ("crawl", "walk") from the step's edge over
+/// its middle (y in 6..14) \[m\].
+fn mean_edge_distance(form: &str, settings: PlannerSettings) -> f64 {
     let p = Planner::new(
         step_scene(),
-        "crawl from the car to the bench",
+        &format!("{form} from the car to the bench"),
         [9.9, 2.0],
         settings,
     )
@@ -203,12 +204,36 @@ fn mean_edge_distance(settings: PlannerSettings) -> f64 {
 
 #[test]
 fn a_crawl_keeps_off_a_step_edge() {
-    let along = mean_edge_distance(PlannerSettings {
-        crawl_relief_cost: 0.0,
-        ..Default::default()
-    });
+    let along = mean_edge_distance(
+        "crawl",
+        PlannerSettings {
+            crawl_relief_cost: 0.0,
+            ..Default::default()
+        },
+    );
     assert!(along < 0.25, "without the relief cost: {along:.2} m");
-    let off = mean_edge_distance(PlannerSettings::default());
+    let off = mean_edge_distance("crawl", PlannerSettings::default());
+    assert!(
+        off >= 0.45,
+        "{off:.2} m from the edge (without the cost {along:.2})"
+    );
+}
+
+#[test]
+fn a_walk_keeps_off_a_step_edge_with_the_stand_relief_cost() {
+    let with = |stand_relief_cost| {
+        mean_edge_distance(
+            "walk",
+            PlannerSettings {
+                stand_relief_cost,
+                ..Default::default()
+            },
+        )
+    };
+    // The crawl's cost alone leaves a walk on its straight line.
+    let along = with(0.0);
+    assert!(along < 0.25, "without the stand relief cost: {along:.2} m");
+    let off = with(8.0);
     assert!(
         off >= 0.45,
         "{off:.2} m from the edge (without the cost {along:.2})"
