@@ -193,7 +193,12 @@ pub struct PlannerSettings {
     /// itself is steeper and its height step is above `max_step_height`. Default 0.7
     /// (40 degrees).
     pub max_slope: f64,
-    /// A height step that is always traversable (stairs) \[m\]. Default 0.25.
+    /// A height step that is always traversable (stairs) \[m\]. Default 0.2, the
+    /// random scenes' own reachability rule (`plamo_scenes::ReachRules`): their stairs'
+    /// risers are 0.08-0.15 m, and a path over a tile's 0.2-0.25 m side is where the
+    /// crawl sat until its time ran out and both gaits fell more (0.25 until session
+    /// 34; MuJoCo tours seeds 0-1999 1669 -> 1703 of 2000, held out 2000-3499 1232 ->
+    /// 1278 of 1500, timeouts 9 -> 0: RESULTS.md).
     pub max_step_height: f64,
     /// Distance kept from a cliff (not in the paper) \[m\]: a height step between
     /// neighbouring terrain samples above `max_step_height`, which no edge crosses.
@@ -302,7 +307,7 @@ impl Default for PlannerSettings {
             slope_preference_c: 1.0,
             height_cost: 0.5,
             max_slope: 0.7,
-            max_step_height: 0.25,
+            max_step_height: 0.2,
             cliff_clearance: 0.3,
             slope_baseline: 0.6,
             slope_speed_gain: 1.0,
