@@ -49,8 +49,8 @@ pub struct PlanGrid {
     pub wall_frames: Vec<FootprintFrame>,
     /// Whether any cell's `body_fits` is not all set (lets searches skip the check).
     pub has_body_limits: bool,
-    /// Relief under a crawling body per cell: highest minus lowest terrain within
-    /// `crawl_half_width` + one cell (a square) \[m\].
+    /// Relief under a body per cell, crawling or not: highest minus lowest terrain
+    /// within `crawl_half_width` + one cell (a square) \[m\].
     pub relief: Vec<f32>,
     /// Whether any cell has relief (lets searches skip the cost).
     pub has_relief: bool,

@@ -121,8 +121,9 @@ pub struct PlannerSettings {
     /// so a route goes around a flight of stairs or a gravel patch where the detour
     /// is short: a preference for smooth ground, as `slope_preference_c` is for
     /// level ground. 0 disables (the paper's planner). Default 0: on the random
-    /// tours it changes most routes and loses tours (MuJoCo seeds 0-1999, 1669 of
-    /// 2000 with 0; 1647 with 3, 1642 with 8: RESULTS.md, session 34).
+    /// tours it changes most routes and loses tours (MuJoCo seeds 0-1999 with
+    /// `max_step_height` 0.25: 1669 of 2000 with 0; 1647 with 3, 1642 with 8:
+    /// RESULTS.md, session 34).
     pub stand_relief_cost: f64,
     /// Cost of crawling under a low top on a leg that is not a crawl (not in the
     /// paper) \[1\]: on a walk, run or crouch-walk leg, each metre of path in the
