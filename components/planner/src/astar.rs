@@ -122,15 +122,10 @@ fn step_length(g: &PlanGrid, d: usize) -> f64 {
 }
 
 /// Extra cost of a step from `a` to `b` (direction `DIRS[d]`) over uneven ground:
-/// its length times `crawl_relief_cost` (crawled) or `stand_relief_cost` (not)
-/// times the relief at both ends (mean) \[m\].
+/// its length times `per_metre` ([`PlanGrid::relief_weight`]) times the relief at
+/// both ends (mean) \[m\].
 #[inline]
-pub(crate) fn relief_cost(g: &PlanGrid, crawled: bool, a: usize, b: usize, d: usize) -> f64 {
-    let per_metre = if crawled {
-        g.relief_cost
-    } else {
-        g.stand_relief_cost
-    };
+pub(crate) fn relief_cost(g: &PlanGrid, per_metre: f64, a: usize, b: usize, d: usize) -> f64 {
     step_length(g, d) * per_metre * 0.5 * (g.relief[a] + g.relief[b]) as f64
 }
 
@@ -349,8 +344,11 @@ impl AStar {
                 let b = c.wrapping_add_signed(offsets[d]);
                 let mut gb = gc + w as f64;
                 if g.has_relief {
-                    let crawled = crawl_applies(g, limits.crawl_body, c, b);
-                    gb += relief_cost(g, crawled, c, b, d);
+                    // A leg with no cost for its posture (standing, by default) skips it.
+                    let w = g.relief_weight(crawl_applies(g, limits.crawl_body, c, b));
+                    if w > 0.0 {
+                        gb += relief_cost(g, w, c, b, d);
+                    }
                 }
                 if g.has_head_cost {
                     gb += head_cost(g, limits.posture, c, b, d);

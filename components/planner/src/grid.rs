@@ -209,6 +209,17 @@ fn keep_off_cliffs(
 }
 
 impl PlanGrid {
+    /// Extra cost per metre per metre of relief \[1/m\]: `crawl_relief_cost` where the
+    /// character crawls, `stand_relief_cost` where it does not.
+    #[inline]
+    pub(crate) fn relief_weight(&self, crawled: bool) -> f64 {
+        if crawled {
+            self.relief_cost
+        } else {
+            self.stand_relief_cost
+        }
+    }
+
     /// Build the grid for a scene.
     pub fn build(scene: &Scene, s: &PlannerSettings) -> Self {
         let t = &scene.terrain;

@@ -5,7 +5,7 @@
 use plamo_scenes::Scene;
 use serde::{Deserialize, Serialize};
 
-use crate::astar::{CrawlBody, GridPath, SearchLimits};
+use crate::astar::{CrawlBody, GridPath, SearchLimits, crawl_applies};
 use crate::grid::{PlanGrid, crawl_body_clear, edge_cost, too_steep};
 use crate::{Locomotion, PlannerSettings};
 
@@ -114,17 +114,7 @@ impl RefineCtx<'_> {
         let Some(c) = c else {
             return 0.0;
         };
-        let applies = match self.limits.crawl_body {
-            CrawlBody::Off => false,
-            CrawlBody::Zone => g.crawl_zone[c],
-            CrawlBody::Everywhere => true,
-        };
-        let per_metre = if applies {
-            g.relief_cost
-        } else {
-            g.stand_relief_cost
-        };
-        per_metre * g.relief[c] as f64
+        g.relief_weight(crawl_applies(g, self.limits.crawl_body, c, c)) * g.relief[c] as f64
     }
 
     /// Cost of the straight segment a-b with the A* edge cost, or `None` if it leaves

@@ -13,7 +13,7 @@ use std::path::Path;
 
 use anyhow::{Context, bail};
 
-use super::random::{CAUSES, FORMS, RandomScenes};
+use super::random::{CAUSES, FORMS, RandomScenes, table_head};
 use super::table::Table;
 use super::{Experiment, Meta, read_meta, wilson};
 use crate::eval::ground::GroundKind;
@@ -138,11 +138,11 @@ impl Sweep {
 }
 
 /// The paired counts of `base` and `new` over their common seeds, with the gained
-/// and lost seeds. Tours with different instructions under one seed (sweeps of
+/// and lost seeds and the common ones. Tours with different instructions under one seed (sweeps of
 /// different `--forms`) are an error: they are not the same tour.
-fn pair(base: &Sweep, new: &Sweep) -> anyhow::Result<(Pairs, Vec<u64>, Vec<u64>)> {
+fn pair(base: &Sweep, new: &Sweep) -> anyhow::Result<(Pairs, Vec<u64>, Vec<u64>, Vec<u64>)> {
     let mut p = Pairs::default();
-    let (mut gained, mut lost) = (Vec::new(), Vec::new());
+    let (mut gained, mut lost, mut common) = (Vec::new(), Vec::new(), Vec::new());
     for (&seed, &rb) in &base.by_seed {
         let Some(&rn) = new.by_seed.get(&seed) else {
             continue;
@@ -160,6 +160,7 @@ fn pair(base: &Sweep, new: &Sweep) -> anyhow::Result<(Pairs, Vec<u64>, Vec<u64>)
             );
         }
         p.n += 1;
+        common.push(seed);
         match (base.success(rb)?, new.success(rn)?) {
             (true, true) => p.both += 1,
             (false, true) => {
@@ -185,7 +186,7 @@ fn pair(base: &Sweep, new: &Sweep) -> anyhow::Result<(Pairs, Vec<u64>, Vec<u64>)
             seed_range(new)
         );
     }
-    Ok((p, gained, lost))
+    Ok((p, gained, lost, common))
 }
 
 fn seed_range(s: &Sweep) -> String {
@@ -227,13 +228,7 @@ fn seed_list(seeds: &[u64]) -> String {
 /// of different engines (the header names both): a backend swap pairs as well.
 pub fn compare(base: &Path, new: &Path, out: Option<&Path>) -> anyhow::Result<String> {
     let (b, n) = (Sweep::read(base)?, Sweep::read(new)?);
-    let (p, gained, lost) = pair(&b, &n)?;
-    let common: Vec<u64> = b
-        .by_seed
-        .keys()
-        .copied()
-        .filter(|s| n.by_seed.contains_key(s))
-        .collect();
+    let (p, gained, lost, common) = pair(&b, &n)?;
     let mut md = String::new();
     let _ = writeln!(md, "# Paired comparison of random-scene sweeps\n");
     let _ = writeln!(
@@ -301,11 +296,7 @@ pub fn compare(base: &Path, new: &Path, out: Option<&Path>) -> anyhow::Result<St
         md,
         "\nTours lost to a fall, by where the first fall came (form, ground), base -> new:\n"
     );
-    let _ = write!(md, "| form |");
-    for g in GroundKind::ALL {
-        let _ = write!(md, " {} |", g.name());
-    }
-    let _ = writeln!(md, "\n|---|{}", "---|".repeat(GroundKind::ALL.len()));
+    table_head(&mut md, GroundKind::ALL.iter().map(|g| g.name()));
     for f in FORMS {
         let _ = write!(md, "| {f} |");
         for g in GroundKind::ALL {

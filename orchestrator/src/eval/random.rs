@@ -164,7 +164,7 @@ fn fall_list<'a>(runs: &'a Table, r: usize, col: &str) -> anyhow::Result<Vec<&'a
 }
 
 /// A markdown table's head: `| form |` and a column per name, then the rule.
-fn table_head<'a>(md: &mut String, names: impl ExactSizeIterator<Item = &'a str>) {
+pub(crate) fn table_head<'a>(md: &mut String, names: impl ExactSizeIterator<Item = &'a str>) {
     md.push_str("| form |");
     let n = names.len();
     for name in names {
