@@ -140,7 +140,14 @@ impl Sweep {
 /// The paired counts of `base` and `new` over their common seeds, with the gained
 /// and lost seeds and the common ones. Tours with different instructions under one seed (sweeps of
 /// different `--forms`) are an error: they are not the same tour.
-fn pair(base: &Sweep, new: &Sweep) -> anyhow::Result<(Pairs, Vec<u64>, Vec<u64>, Vec<u64>)> {
+/// Seeds of the common tours by how they went (see [`pair`]).
+struct Seeds {
+    gained: Vec<u64>,
+    lost: Vec<u64>,
+    common: Vec<u64>,
+}
+
+fn pair(base: &Sweep, new: &Sweep) -> anyhow::Result<(Pairs, Seeds)> {
     let mut p = Pairs::default();
     let (mut gained, mut lost, mut common) = (Vec::new(), Vec::new(), Vec::new());
     for (&seed, &rb) in &base.by_seed {
@@ -186,7 +193,14 @@ fn pair(base: &Sweep, new: &Sweep) -> anyhow::Result<(Pairs, Vec<u64>, Vec<u64>,
             seed_range(new)
         );
     }
-    Ok((p, gained, lost, common))
+    Ok((
+        p,
+        Seeds {
+            gained,
+            lost,
+            common,
+        },
+    ))
 }
 
 fn seed_range(s: &Sweep) -> String {
@@ -228,7 +242,14 @@ fn seed_list(seeds: &[u64]) -> String {
 /// of different engines (the header names both): a backend swap pairs as well.
 pub fn compare(base: &Path, new: &Path, out: Option<&Path>) -> anyhow::Result<String> {
     let (b, n) = (Sweep::read(base)?, Sweep::read(new)?);
-    let (p, gained, lost, common) = pair(&b, &n)?;
+    let (
+        p,
+        Seeds {
+            gained,
+            lost,
+            common,
+        },
+    ) = pair(&b, &n)?;
     let mut md = String::new();
     let _ = writeln!(md, "# Paired comparison of random-scene sweeps\n");
     let _ = writeln!(
