@@ -29,9 +29,9 @@
 use std::error::Error;
 
 use plamo_controller::{
-    ArcPath, ControllerSettings, CrawlParams, DropPath, GaitParams, HeadPath, MetricsSummary,
-    ModelBasedController, RisingPath, START_ACCEL, StraightPath, TurnPath, ceiling_scene,
-    flat_scene, ledge_scene, run_path_with, staggered_start,
+    ArcPath, ControllerSettings, CrawlParams, DropPath, FallBody, GaitParams, HeadPath,
+    MetricsSummary, ModelBasedController, RisingPath, START_ACCEL, StraightPath, TurnPath,
+    ceiling_scene, flat_scene, ledge_scene, run_path_with, staggered_start,
 };
 use plamo_physics::BackendKind;
 use rayon::prelude::*;
@@ -417,7 +417,7 @@ fn trace(
     for c in 0..steps {
         let t = c as f64 / 30.0;
         let state = physics.state().clone();
-        let ground = scene.height_at(state.head[0], state.head[1]);
+        let ground = settings.fall_ground(&scene, &FallBody::of(&state));
         if settings.is_fallen(state.head[2] - ground, path.head_height()) {
             println!(
                 "{engine:?} t {t:5.2} FALLEN (head {:.2} m above the ground)",

@@ -26,7 +26,7 @@
 use std::error::Error;
 
 use plamo_controller::{
-    Action, ArcPath, ControllerSettings, GaitParams, HeadPath, MetricsSummary,
+    Action, ArcPath, ControllerSettings, FallBody, GaitParams, HeadPath, MetricsSummary,
     ModelBasedController, Observation, Policy, RUN_STAGGER, RampedPath, START_ACCEL, STRIP_LENGTH,
     StraightPath, TurnPath, control_step, flat_scene, run_path, staggered_start, terrain_scene,
 };
@@ -283,7 +283,7 @@ fn trace(
         let g = |x: f64, y: f64| scene.height_at(x, y);
         let [px, py, pz] = s.root_position;
         let ground = g(px, py);
-        let head_h = s.head[2] - g(s.head[0], s.head[1]);
+        let head_h = s.head[2] - settings.fall_ground(scene, &FallBody::of(&s));
         let target = path.point(scene, t);
         let fallen = settings.is_fallen(head_h, path.head_height());
         let foot = |f: usize| {

@@ -10,6 +10,7 @@
 
 mod component;
 mod error;
+pub mod fall_ground;
 mod gait;
 mod math;
 mod metrics;
@@ -22,6 +23,7 @@ mod tune;
 
 pub use component::{ControllerComponent, snapshot_from_message};
 pub use error::{ControllerError, Result};
+pub use fall_ground::{FallBody, pelvis_roll};
 pub use gait::{
     CRAWL_PARAMS_VERSION, CrawlParams, DEFAULT_CRAWL_PARAMS, DEFAULT_GAIT_PARAMS, FormParams,
     GAIT_PARAMS_VERSION, GaitParams, HAND_CRAWL_PARAMS, LegGeometry, ModelBasedController,

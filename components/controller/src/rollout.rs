@@ -11,6 +11,7 @@ use plamo_scenes::{HeightGrid, Scene};
 
 use crate::ModelBasedController;
 use crate::error::Result;
+use crate::fall_ground::FallBody;
 use crate::metrics::{MetricsAccumulator, MetricsSummary, PathRewardWeights, StepSample};
 use crate::observation::{
     HumanoidSnapshot, NUM_WAYPOINTS, Observation, WAYPOINT_SPACING, Waypoint,
@@ -481,7 +482,7 @@ pub fn run_path_with(
     for c in 0..steps {
         let t = c as f64 / plamo_interfaces::CONTROL_HZ as f64;
         let state = physics.state().clone();
-        let ground = scene.height_at(state.head[0], state.head[1]);
+        let ground = settings.fall_ground(scene, &FallBody::of(&state));
         let fallen = settings.is_fallen(state.head[2] - ground, path.head_height());
         let target = path.point(scene, t);
         let dir = path.direction(t);

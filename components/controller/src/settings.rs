@@ -28,6 +28,18 @@ pub struct ControllerSettings {
     /// begins) the body needs time to stand up, so the bar rises no faster than the
     /// biped raises its head. Lower requests apply at once. Default 0.5.
     pub fall_rise_rate: f64,
+    /// Whether the head's height is judged from the lower of the ground under it and
+    /// the body's lowest point while the body is still up (`fall_up_pelvis`,
+    /// `fall_up_roll`), as ProtoMotions measures it, rather than always from the
+    /// ground under the head (`crate::fall_ground`). Default true (session 35); false
+    /// replays older figures.
+    pub fall_from_lowest_body: bool,
+    /// Least pelvis height above the ground under it for a body still up \[m\].
+    /// Default [`crate::fall_ground::UP_PELVIS`] (0.3).
+    pub fall_up_pelvis: f64,
+    /// Pelvis roll from which a body is no longer up \[rad\]. Default
+    /// [`crate::fall_ground::UP_ROLL`] (0.6).
+    pub fall_up_roll: f64,
 }
 
 impl Default for ControllerSettings {
@@ -39,6 +51,9 @@ impl Default for ControllerSettings {
             fall_height_drift: 0.5,
             fall_min_head_height: 0.2,
             fall_rise_rate: 0.5,
+            fall_from_lowest_body: true,
+            fall_up_pelvis: crate::fall_ground::UP_PELVIS,
+            fall_up_roll: crate::fall_ground::UP_ROLL,
         }
     }
 }
@@ -90,6 +105,16 @@ impl ControllerSettings {
             self.fall_rise_rate.is_finite() && self.fall_rise_rate > 0.0,
             "fall_rise_rate",
             "must be > 0 m/s",
+        )?;
+        check(
+            self.fall_up_pelvis.is_finite() && self.fall_up_pelvis >= 0.0,
+            "fall_up_pelvis",
+            "must be >= 0 m",
+        )?;
+        check(
+            self.fall_up_roll.is_finite() && self.fall_up_roll >= 0.0,
+            "fall_up_roll",
+            "must be >= 0 rad",
         )
     }
 

@@ -2,23 +2,25 @@
 //! state of that step: the experiments break their falls down by it, so a change to
 //! the controller can be aimed at the kind of fall that loses the most tours.
 //!
-//! The fall rule only looks at the head's height above the ground under it. A crawler
-//! on its knees and forearms whose head passes over a tread ahead is judged by that
-//! tread, while its pelvis is still at crawl height: that kind is told apart from a
-//! body that rolled over or went down forward or backward.
+//! Up to session 34 the fall rule judged the head from the ground under it, so a
+//! crawler on its knees and forearms whose head passed over a tread ahead was judged
+//! by that tread while its pelvis was still at crawl height: *head-over-step* tells
+//! that kind apart from a body that rolled over or went down forward or backward.
+//! Since then a body still up is judged from its lowest point
+//! ([`plamo_controller::fall_ground`]), and a head over a step is a fall only where
+//! it came within the rule's bar of the body's lowest point too.
 
 use plamo_scenes::Scene;
 
-/// Smallest pelvis roll taken as rolled over \[rad\]: 20 of 24 crawl falls on stairs
-/// replayed in session 31 were under 0.4 rad, upright with the head over a tread;
-/// session 23 read a roll-over as past 0.8 rad (RESULTS.md "Crawl").
-pub const ROLLED_FROM: f64 = 0.6;
+/// Smallest pelvis roll taken as rolled over \[rad\]: the roll from which the fall
+/// rule no longer judges the body as up ([`plamo_controller::fall_ground`]).
+pub const ROLLED_FROM: f64 = plamo_controller::fall_ground::UP_ROLL;
 /// Least rise of the ground under the head above the ground under the pelvis for a
 /// head over a step \[m\]: the random scenes' risers are 0.08-0.15 m.
 pub const STEP_UNDER_HEAD: f64 = 0.08;
 /// Least height of the pelvis above the ground under it for a body still up on its
-/// limbs \[m\]: a crawl's pelvis rides at ~0.45-0.55 m.
-pub const PELVIS_UP: f64 = 0.3;
+/// limbs \[m\] (as the fall rule's, [`plamo_controller::fall_ground`]).
+pub const PELVIS_UP: f64 = plamo_controller::fall_ground::UP_PELVIS;
 
 /// What the posture is read from: the humanoid's root and head (world frame).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -72,12 +74,11 @@ impl FallPosture {
     /// The posture of a humanoid in pose `s` in `scene`.
     pub fn of(scene: &Scene, s: &FallPose) -> Self {
         let [x, y, z, w] = s.orientation;
-        // The pelvis's left axis rises with its roll, whatever its pitch.
-        let left_up = 2.0 * (y * z + x * w);
+        let roll = plamo_controller::pelvis_roll([w, x, y, z]);
         let forward = [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + z * w)];
         let (r, h) = (s.root, s.head);
         let under_root = scene.height_at(r[0], r[1]);
-        if left_up.clamp(-1.0, 1.0).asin().abs() >= ROLLED_FROM {
+        if roll.abs() >= ROLLED_FROM {
             Self::Rolled
         } else if r[2] - under_root >= PELVIS_UP
             && scene.height_at(h[0], h[1]) - under_root >= STEP_UNDER_HEAD

@@ -264,8 +264,8 @@ fn posture_table(runs: &Table) -> anyhow::Result<String> {
         "\nHow the body lay when the fall rule judged it fallen: falls, and [tours whose first \
          fall it was]; rolled: pelvis roll past {ROLLED_FROM} rad; head-over-step: pelvis \
          still up ({PELVIS_UP} m or more) and the ground under the head {STEP_UNDER_HEAD} m or \
-         more above the ground under the pelvis (the rule measures the head against the \
-         ground under it); forward / backward: the head ahead of / behind the pelvis \
+         more above the ground under the pelvis (a body still up is judged from its lowest \
+         point, so such a head came within the rule's bar of it too); forward / backward: the head ahead of / behind the pelvis \
          (`eval::fall_posture`).\n\n",
     );
     table_head(&mut md, FallPosture::ALL.iter().map(|p| p.name()));

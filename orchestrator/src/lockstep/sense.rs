@@ -8,8 +8,8 @@
 use std::collections::VecDeque;
 
 use plamo_controller::{
-    ControllerSettings, MetricsAccumulator, MetricsSummary, PathRewardWeights, RootWrench,
-    StepSample,
+    ControllerSettings, FallBody, MetricsAccumulator, MetricsSummary, PathRewardWeights,
+    RootWrench, StepSample,
 };
 use plamo_interfaces::{
     AgentAction, CONTROL_DT, CONTROL_HZ, HumanoidState, PLAN_WAYPOINT_DT, PlanMessage, Tick,
@@ -145,7 +145,14 @@ impl AgentTracker {
     /// The fall verdict, and the requested height it held the head to.
     fn judge(&self, scene: &Scene, s: &HumanoidState, plan: &PlanMessage) -> (bool, f64) {
         let h = s.head_position;
-        let above = h[2] - scene.height_at(h[0], h[1]);
+        let q = s.root_orientation;
+        let body = FallBody {
+            head: h,
+            pelvis: s.root_position,
+            pelvis_quat: [q[3], q[0], q[1], q[2]],
+            bodies: &s.body_positions[..(s.body_count as usize).min(s.body_positions.len())],
+        };
+        let above = h[2] - self.settings.fall_ground(scene, &body);
         let fall_bar = if self.reset {
             self.fall_bar.min(above)
         } else {
@@ -294,6 +301,46 @@ mod tests {
         s.root_position = [9.5, 20.4, 0.2];
         s.head_position = [9.9, 20.4, 0.1];
         assert!(tracker.is_fallen(&scene, &s, &plan));
+    }
+
+    /// A crawler up on its knees at the foot of a riser whose head is over the tread
+    /// above is judged from its knees, not from that tread; lying there, or with the
+    /// rule switched off, it is fallen.
+    #[test]
+    fn a_crawler_with_its_head_over_a_tread_is_judged_from_its_knees() {
+        let scene = plamo_scenes::builtin("terrain-stairs").unwrap();
+        let y = 0.0;
+        let x = (0..600)
+            .map(|i| 5.0 + i as f64 * 0.05)
+            .find(|&x| scene.height_at(x + 0.5, y) - scene.height_at(x, y) > 0.1)
+            .expect("a riser on the stairs strip");
+        let (low, high) = (scene.height_at(x, y), scene.height_at(x + 0.5, y));
+        let mut plan = PlanMessage {
+            form_height: 0.4,
+            ..Default::default()
+        };
+        plan.waypoints[0].position = [x + 1.0, y, high + 0.4];
+        let mut s = HumanoidState {
+            root_position: [x, y, low + 0.5],
+            head_position: [x + 0.5, y, high + 0.18],
+            body_count: 2,
+            ..Default::default()
+        };
+        s.body_positions[0] = s.root_position;
+        s.body_positions[1] = [x - 0.2, y, low + 0.05];
+        let judged = |settings: ControllerSettings, s: &HumanoidState| {
+            AgentTracker::new(1, settings).is_fallen(&scene, s, &plan)
+        };
+        assert!(!judged(ControllerSettings::default(), &s));
+        let old = ControllerSettings {
+            fall_from_lowest_body: false,
+            ..Default::default()
+        };
+        assert!(judged(old, &s));
+        // Down on the riser: the pelvis no higher than the tread it lies against.
+        s.root_position[2] = low + 0.15;
+        s.body_positions[0] = s.root_position;
+        assert!(judged(ControllerSettings::default(), &s));
     }
 
     /// A body put back on hands and knees (a start under a low top, a reset under one)
