@@ -259,8 +259,23 @@ impl RunSpec {
 
     /// Where agent `k` starts: the centre of its first instruction's source landmark
     /// (or the spot of it nearest the centre with room to stand, see [`start_spot`]),
-    /// facing its first target, heading perturbed by the seed.
+    /// facing its first target, heading perturbed by the seed. The physics world puts
+    /// it there facing along its plan instead ([`RunSpec::placement_facing`]).
     pub fn placement(&self, scene: &Scene, k: usize) -> Result<Placement, RunError> {
+        self.placement_facing(scene, k, None)
+    }
+
+    /// Where agent `k` starts ([`RunSpec::placement`]), facing `heading` \[rad\] (its
+    /// plan's [`Planner::start_heading`]) where given, else its first target; either
+    /// perturbed by the seed. A route that leaves round a wall or a hill sets off
+    /// another way than the target lies: a body facing the target turned on the spot
+    /// first, and a crawl did so while getting down.
+    pub fn placement_facing(
+        &self,
+        scene: &Scene,
+        k: usize,
+        heading: Option<f64>,
+    ) -> Result<Placement, RunError> {
         let parsed = parse_instructions(&self.instructions[k], scene).map_err(setup)?;
         let first = parsed
             .first()
@@ -281,7 +296,8 @@ impl RunSpec {
         let [tx, ty] = region(&first.target)?.center();
         let r = splitmix(&mut (self.seed ^ splitmix(&mut (k as u64))));
         let unit = (r >> 11) as f64 / (1u64 << 53) as f64;
-        let yaw = (ty - y).atan2(tx - x) + (2.0 * unit - 1.0) * SEED_YAW_JITTER;
+        let yaw = heading.unwrap_or_else(|| (ty - y).atan2(tx - x))
+            + (2.0 * unit - 1.0) * SEED_YAW_JITTER;
         Ok(Placement { x, y, yaw })
     }
 
@@ -336,14 +352,28 @@ impl RunSpec {
     }
 
     /// The physics world with every agent at its start, with `settings` (a sweep
-    /// reads its file once).
+    /// reads its file once); each agent's plan is made here for the way it faces.
     pub fn physics_with(
         &self,
         scene: &Scene,
         settings: &PhysicsSettings,
     ) -> Result<PhysicsComponent, RunError> {
+        let headings = (0..self.agents())
+            .map(|k| Ok(self.planner(scene, k)?.planner().start_heading()))
+            .collect::<Result<Vec<_>, RunError>>()?;
+        self.physics_facing(scene, settings, &headings)
+    }
+
+    /// The physics world with every agent at its start facing `headings[k]`
+    /// ([`RunSpec::placement_facing`]; from planners already made).
+    pub fn physics_facing(
+        &self,
+        scene: &Scene,
+        settings: &PhysicsSettings,
+        headings: &[Option<f64>],
+    ) -> Result<PhysicsComponent, RunError> {
         let placements = (0..self.agents())
-            .map(|k| self.placement(scene, k))
+            .map(|k| self.placement_facing(scene, k, headings.get(k).copied().flatten()))
             .collect::<Result<Vec<_>, _>>()?;
         if !self.backend.is_available() {
             return Err(RunError::Setup(format!(
@@ -359,18 +389,19 @@ impl RunSpec {
     pub fn in_process(&self, scene: &Scene) -> Result<Links, RunError> {
         let mut planners: Vec<Box<dyn crate::lockstep::Link<_, _>>> = Vec::new();
         let mut controllers: Vec<Box<dyn crate::lockstep::Link<_, _>>> = Vec::new();
+        let mut headings = Vec::new();
         for k in 0..self.agents() {
-            planners.push(Box::new(InProcess::new(
-                format!("planner-{k}"),
-                self.planner(scene, k)?,
-            )));
+            let planner = self.planner(scene, k)?;
+            headings.push(planner.planner().start_heading());
+            planners.push(Box::new(InProcess::new(format!("planner-{k}"), planner)));
             controllers.push(Box::new(InProcess::new(
                 format!("controller-{k}"),
                 self.controller(scene, k)?,
             )));
         }
+        let physics = self.physics_facing(scene, &self.physics_settings()?, &headings)?;
         Ok(Links {
-            physics: Box::new(InProcess::new("physics", self.physics(scene)?)),
+            physics: Box::new(InProcess::new("physics", physics)),
             planners,
             controllers,
         })
@@ -474,6 +505,45 @@ thickness = 0.2
         };
         let p = spec.placement(&scene, 0).unwrap();
         (scene, p)
+    }
+
+    /// A wall east of `a` from the south edge to y 6.5: the route to `b` leaves `a`
+    /// northwards, and the body is put there facing that way, not towards `b`.
+    #[test]
+    fn a_start_faces_along_its_plan_not_at_its_target() {
+        let wall = r#"
+[[walls]]
+name = "screen"
+center = [5.6, 3.25]
+size = [0.3, 6.5]
+height = 1.8
+"#;
+        let toml = OPEN.replacen("[[landmarks]]", &format!("{wall}\n[[landmarks]]"), 1);
+        let scene = plamo_scenes::from_toml_str(&toml, "low-start").unwrap();
+        let spec = RunSpec {
+            scene: "low-start".into(),
+            instructions: vec!["Walk from the a to the b".into()],
+            backend: BackendKind::Rapier,
+            seed: 0,
+            params: ParamFiles::default(),
+        };
+        let towards_b = spec.placement(&scene, 0).unwrap().yaw;
+        assert!(towards_b.abs() <= SEED_YAW_JITTER, "{towards_b}");
+        let heading = spec
+            .planner(&scene, 0)
+            .unwrap()
+            .planner()
+            .start_heading()
+            .expect("a route with length");
+        assert!(heading > 0.5, "the route sets off north-east: {heading}");
+        let p = spec.placement_facing(&scene, 0, Some(heading)).unwrap();
+        assert!(
+            (p.yaw - heading).abs() <= SEED_YAW_JITTER,
+            "{} vs {heading}",
+            p.yaw
+        );
+        // The same jitter either way: only the direction it is added to differs.
+        assert!(((p.yaw - heading) - towards_b).abs() < 1e-12);
     }
 
     #[test]

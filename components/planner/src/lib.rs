@@ -39,7 +39,9 @@ pub use dynamic::{
 pub use error::{PlanError, SpeedFailure, UnreachableReason};
 pub use grid::PlanGrid;
 pub use instructions::{Instruction, Locomotion, Source, VALID_VERBS, parse_instructions};
-pub use planner::{PlanStatus, Planner, PlannerInput, PlannerOutput, Progress, ReplanReason};
+pub use planner::{
+    PlanStatus, Planner, PlannerInput, PlannerOutput, Progress, ReplanReason, START_HEADING_SPAN,
+};
 pub use refine::PathPoint;
 pub use settings::PlannerSettings;
 pub use speed_oracle::{SpeedProblem, forward_backward, travel_time};

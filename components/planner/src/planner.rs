@@ -23,6 +23,12 @@ use crate::{
     Waypoint, parse_instructions,
 };
 
+/// Length of the route's start over which [`Planner::start_heading`] is measured \[m\]:
+/// about a body length, so a bend a few metres on does not turn the start, and a
+/// route that leaves a landmark round a wall or a hill faces the way it goes rather
+/// than the target beyond.
+pub const START_HEADING_SPAN: f64 = 1.0;
+
 /// The humanoid's state as the planner reads it each control step.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct PlannerInput {
@@ -186,6 +192,12 @@ impl Planner {
     /// back to back from t = 0.
     pub fn route(&self) -> &[Trajectory] {
         &self.route
+    }
+    /// The direction the route sets off in \[rad\]: that of its first
+    /// [`START_HEADING_SPAN`] metres, where a body at the start should face. `None`
+    /// where the first leg has no length.
+    pub fn start_heading(&self) -> Option<f64> {
+        self.route.first()?.heading_over(START_HEADING_SPAN)
     }
     /// The planning grid.
     pub fn grid(&self) -> &PlanGrid {

@@ -128,6 +128,20 @@ impl Trajectory {
         (1..=n).map(|k| self.sample_at(t + k as f64 * dt)).collect()
     }
 
+    /// Direction of the path's first `span` metres, from its first point to the point
+    /// that far along it (or its end) \[rad\]; `None` for a path shorter than a
+    /// centimetre.
+    pub fn heading_over(&self, span: f64) -> Option<f64> {
+        let first = self.points.first()?;
+        let along = self
+            .points
+            .iter()
+            .find(|p| p.s - first.s >= span)
+            .or(self.points.last())?;
+        let (dx, dy) = (along.x - first.x, along.y - first.y);
+        (dx.hypot(dy) >= 0.01).then(|| dy.atan2(dx))
+    }
+
     /// Index of the path point nearest to (x, y) and its distance \[m\].
     pub fn closest_point(&self, x: f64, y: f64) -> Option<(usize, f64)> {
         self.points
@@ -156,6 +170,39 @@ mod tests {
             })
             .collect();
         Trajectory::new(10.0, pts)
+    }
+
+    /// A path 0.5 m north, then east: its first metre heads between the two, a
+    /// shorter span north, a path of one point nowhere.
+    #[test]
+    fn the_heading_is_that_of_the_paths_first_span() {
+        let pt = |x: f64, y: f64, s: f64| PathPoint {
+            x,
+            y,
+            s,
+            v: 1.0,
+            ..Default::default()
+        };
+        let tr = Trajectory::new(
+            0.0,
+            vec![
+                pt(0.0, 0.0, 0.0),
+                pt(0.0, 0.5, 0.5),
+                pt(0.5, 0.5, 1.0),
+                pt(3.0, 0.5, 3.5),
+            ],
+        );
+        let h = tr.heading_over(1.0).unwrap();
+        assert!((h - std::f64::consts::FRAC_PI_4).abs() < 1e-12, "{h}");
+        let h = tr.heading_over(0.4).unwrap();
+        assert!((h - std::f64::consts::FRAC_PI_2).abs() < 1e-12, "{h}");
+        // Longer than the path: to its end.
+        let h = tr.heading_over(10.0).unwrap();
+        assert!((h - 0.5f64.atan2(3.0)).abs() < 1e-12, "{h}");
+        assert_eq!(
+            Trajectory::new(0.0, vec![pt(1.0, 1.0, 0.0)]).heading_over(1.0),
+            None
+        );
     }
 
     #[test]

@@ -277,7 +277,7 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
     let links = Links {
         physics: Box::new(InProcess::new(
             "physics",
-            run.physics_with(scene, &spec.physics_settings)?,
+            run.physics_facing(scene, &spec.physics_settings, &[planner.start_heading()])?,
         )),
         planners: vec![Box::new(InProcess::new(
             "planner-0",

@@ -63,11 +63,11 @@ pub fn in_process_with_external(
     let with_slots = slot_scene(scene, shapes)?;
     let mut planners: Vec<Box<dyn Link<_, _>>> = Vec::new();
     let mut controllers: Vec<Box<dyn Link<_, _>>> = Vec::new();
+    let mut headings = Vec::new();
     for k in 0..spec.agents() {
-        planners.push(Box::new(InProcess::new(
-            format!("planner-{k}"),
-            spec.planner_in(scene, &with_slots, k)?,
-        )));
+        let planner = spec.planner_in(scene, &with_slots, k)?;
+        headings.push(planner.planner().start_heading());
+        planners.push(Box::new(InProcess::new(format!("planner-{k}"), planner)));
         controllers.push(Box::new(InProcess::new(
             format!("controller-{k}"),
             spec.controller(scene, k)?,
@@ -76,7 +76,7 @@ pub fn in_process_with_external(
     Ok(Links {
         physics: Box::new(InProcess::new(
             "physics",
-            spec.physics(&with_slots)?
+            spec.physics_facing(&with_slots, &spec.physics_settings()?, &headings)?
                 .with_external_slots(shapes.len())
                 .map_err(|e| RunError::Setup(e.to_string()))?,
         )),
