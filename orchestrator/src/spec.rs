@@ -494,7 +494,8 @@ clearance = 1.2
 thickness = 0.2
 "#;
 
-    fn start(toml: &str) -> (Scene, Placement) {
+    /// The scene of `toml` and a walk from `a` to `b` in it.
+    fn walk_a_to_b(toml: &str) -> (Scene, RunSpec) {
         let scene = plamo_scenes::from_toml_str(toml, "low-start").unwrap();
         let spec = RunSpec {
             scene: "low-start".into(),
@@ -503,6 +504,11 @@ thickness = 0.2
             seed: 0,
             params: ParamFiles::default(),
         };
+        (scene, spec)
+    }
+
+    fn start(toml: &str) -> (Scene, Placement) {
+        let (scene, spec) = walk_a_to_b(toml);
         let p = spec.placement(&scene, 0).unwrap();
         (scene, p)
     }
@@ -519,14 +525,7 @@ size = [0.3, 6.5]
 height = 1.8
 "#;
         let toml = OPEN.replacen("[[landmarks]]", &format!("{wall}\n[[landmarks]]"), 1);
-        let scene = plamo_scenes::from_toml_str(&toml, "low-start").unwrap();
-        let spec = RunSpec {
-            scene: "low-start".into(),
-            instructions: vec!["Walk from the a to the b".into()],
-            backend: BackendKind::Rapier,
-            seed: 0,
-            params: ParamFiles::default(),
-        };
+        let (scene, spec) = walk_a_to_b(&toml);
         let towards_b = spec.placement(&scene, 0).unwrap().yaw;
         assert!(towards_b.abs() <= SEED_YAW_JITTER, "{towards_b}");
         let heading = spec
