@@ -73,6 +73,13 @@ impl Default for HumanoidState {
     }
 }
 
+impl HumanoidState {
+    /// The valid entries of `body_positions` (a count past the array is cut to it).
+    pub fn bodies(&self) -> &[[f64; 3]] {
+        &self.body_positions[..(self.body_count as usize).min(self.body_positions.len())]
+    }
+}
+
 /// Position and velocity of one dynamic obstacle.
 #[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
 #[repr(C)]

@@ -46,9 +46,7 @@ pub fn snapshot_from_message(s: &HumanoidState, out: &mut HumanoidSnapshot) {
     out.joint_vel
         .extend_from_slice(&s.joint_velocities[..(s.joint_count as usize).min(MAX_JOINTS)]);
     out.body_pos.clear();
-    out.body_pos.extend_from_slice(
-        &s.body_positions[..(s.body_count as usize).min(s.body_positions.len())],
-    );
+    out.body_pos.extend_from_slice(s.bodies());
 }
 
 impl ControllerComponent {

@@ -48,6 +48,17 @@ impl<'a> FallBody<'a> {
             bodies: &state.body_pos,
         }
     }
+
+    /// What the fall rule reads of a state message (its quaternion is `(x, y, z, w)`).
+    pub fn of_message(state: &'a plamo_interfaces::HumanoidState) -> Self {
+        let [x, y, z, w] = state.root_orientation;
+        Self {
+            head: state.head_position,
+            pelvis: state.root_position,
+            pelvis_quat: [w, x, y, z],
+            bodies: state.bodies(),
+        }
+    }
 }
 
 /// Roll of a pelvis with orientation `q` (`[w, x, y, z]`) \[rad\]: the angle its
@@ -65,13 +76,16 @@ impl ControllerSettings {
         if !self.fall_from_lowest_body {
             return under_head;
         }
+        let lowest = body.bodies.iter().map(|p| p[2]).fold(under_head, f64::min);
+        // On even ground no body is below the ground under the head: the posture
+        // decides nothing there.
+        if lowest == under_head {
+            return under_head;
+        }
         let [px, py, pz] = body.pelvis;
         let up = pz - scene.height_at(px, py) >= self.fall_up_pelvis
             && pelvis_roll(body.pelvis_quat).abs() < self.fall_up_roll;
-        if !up {
-            return under_head;
-        }
-        body.bodies.iter().map(|p| p[2]).fold(under_head, f64::min)
+        if up { lowest } else { under_head }
     }
 }
 

@@ -335,7 +335,7 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
         ep.infeasible |= plan.flags & FLAG_INFEASIBLE != 0;
         ep.replans += u32::from(plan.flags & FLAG_REPLANNED != 0);
         let a = &ls.world().agents[0];
-        let bodies = &a.body_positions[..(a.body_count as usize).min(a.body_positions.len())];
+        let bodies = a.bodies();
         if t >= next_track {
             ep.track.push([a.head_position[0], a.head_position[1]]);
             next_track += TRACK_DT;

@@ -265,8 +265,8 @@ fn posture_table(runs: &Table) -> anyhow::Result<String> {
          fall it was]; rolled: pelvis roll past {ROLLED_FROM} rad; head-over-step: pelvis \
          still up ({PELVIS_UP} m or more) and the ground under the head {STEP_UNDER_HEAD} m or \
          more above the ground under the pelvis (a body still up is judged from its lowest \
-         point, so such a head came within the rule's bar of it too); forward / backward: the head ahead of / behind the pelvis \
-         (`eval::fall_posture`).\n\n",
+         point, so such a head came within the rule's bar of it too); forward / backward: \
+         the head ahead of / behind the pelvis (`eval::fall_posture`).\n\n",
     );
     table_head(&mut md, FallPosture::ALL.iter().map(|p| p.name()));
     let mut forms: Vec<String> = FORMS.iter().map(|f| f.to_string()).collect();

@@ -145,14 +145,7 @@ impl AgentTracker {
     /// The fall verdict, and the requested height it held the head to.
     fn judge(&self, scene: &Scene, s: &HumanoidState, plan: &PlanMessage) -> (bool, f64) {
         let h = s.head_position;
-        let q = s.root_orientation;
-        let body = FallBody {
-            head: h,
-            pelvis: s.root_position,
-            pelvis_quat: [q[3], q[0], q[1], q[2]],
-            bodies: &s.body_positions[..(s.body_count as usize).min(s.body_positions.len())],
-        };
-        let above = h[2] - self.settings.fall_ground(scene, &body);
+        let above = h[2] - self.settings.fall_ground(scene, &FallBody::of_message(s));
         let fall_bar = if self.reset {
             self.fall_bar.min(above)
         } else {
@@ -227,7 +220,8 @@ impl AgentTracker {
         self.steps += 1;
         self.last_xy_error = ((target[0] - head[0]).powi(2) + (target[1] - head[1]).powi(2)).sqrt();
         let yaw = heading(s.root_orientation);
-        let max_other = s.body_positions[..(s.body_count as usize).min(s.body_positions.len())]
+        let max_other = s
+            .bodies()
             .iter()
             .enumerate()
             .filter(|(b, _)| *b != HEAD)
