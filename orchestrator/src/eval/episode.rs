@@ -96,9 +96,9 @@ pub struct Episode {
 }
 
 /// Where a fall happened: the form the instruction asked for, the ground under
-/// the root and the body's posture when the fall rule first judged the humanoid
-/// fallen.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// the root, the body's posture when the fall rule first judged the humanoid
+/// fallen, and when in its instruction that was.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FallSite {
     /// The instruction's locomotion.
     pub locomotion: Locomotion,
@@ -106,6 +106,11 @@ pub struct FallSite {
     pub ground: GroundKind,
     /// How the body lay.
     pub posture: FallPosture,
+    /// The instruction it fell in (0 = the first).
+    pub leg: usize,
+    /// How long that instruction had been running \[s\]: a fall in a leg's first
+    /// seconds is one of the change of form or of heading at its landmark.
+    pub into_leg: f64,
 }
 
 /// A locomotion's instruction verb ("crouch-walk"), as the experiments write it.
@@ -158,6 +163,13 @@ impl Episode {
     /// [`Episode::fall_sites_field`]), a CSV-safe field.
     pub fn fall_postures_field(&self) -> String {
         self.join_falls(|s| s.posture.name().to_string())
+    }
+
+    /// When in their instructions the falls came, as `n:seconds;...` (n from 1, as
+    /// `plamo run` numbers instructions; in the order of
+    /// [`Episode::fall_sites_field`]), a CSV-safe field.
+    pub fn fall_legs_field(&self) -> String {
+        self.join_falls(|s| format!("{}:{:.2}", s.leg + 1, s.into_leg))
     }
 
     fn join_falls(&self, each: impl Fn(&FallSite) -> String) -> String {
@@ -298,6 +310,8 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
     let mut touching = vec![false; scene.dynamic.len()];
     let mut next_track = 0.0;
     let mut falls_so_far = 0;
+    // The instruction under way and when it began \[s\].
+    let mut leg = (0, 0.0);
     let status = loop {
         // The pose the fall rule judges in this step (the body may be put back in it).
         let a = &ls.world().agents[0];
@@ -311,11 +325,16 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
         // instruction: a fall across an instruction's end counts in both).
         let falls = ls.falls(0);
         let i = (ls.plans()[0].instruction as usize).min(forms.len().saturating_sub(1));
+        if i != leg.0 {
+            leg = (i, ls.tick().seconds());
+        }
         for _ in falls_so_far..falls {
             ep.fall_sites.push(FallSite {
                 locomotion: forms.get(i).copied().unwrap_or(Locomotion::Walk),
                 ground: ground_kind(&scene.terrain, judged.root[0], judged.root[1]),
                 posture: FallPosture::of(scene, &judged),
+                leg: i,
+                into_leg: ls.tick().seconds() - leg.1,
             });
         }
         falls_so_far = falls;
@@ -406,7 +425,21 @@ mod tests {
         );
         for s in &ep.fall_sites {
             assert_eq!(s.locomotion, Locomotion::Run);
+            // One instruction: every fall is in it, timed from the start.
+            assert_eq!(s.leg, 0);
+            assert!(s.into_leg > 0.0 && s.into_leg <= 16.0, "{s:?}");
         }
+        assert_eq!(
+            ep.fall_legs_field().split(';').count(),
+            ep.falls as usize,
+            "{}",
+            ep.fall_legs_field()
+        );
+        assert!(
+            ep.fall_legs_field().starts_with("1:"),
+            "{}",
+            ep.fall_legs_field()
+        );
         assert_eq!(
             ep.fall_postures_field().split(';').count(),
             ep.falls as usize,

@@ -288,7 +288,88 @@ fn posture_table(runs: &Table) -> anyhow::Result<String> {
     Ok(md)
 }
 
-const COLUMNS: [&str; 22] = [
+/// How far into its leg a first fall counts as one of the leg's start \[s\]: a
+/// get-down or a get-up takes 1.5-2 s, and a turn on the spot at the landmark about
+/// as long.
+const LEG_START: f64 = 4.0;
+
+/// Each leg's form in a tour's text as [`tour`] writes it ("Run from the rock to the
+/// kiosk; then walk to ..."): the first word of the text and of every part after a
+/// "then ".
+fn leg_forms(text: &str) -> Vec<String> {
+    text.split("then ")
+        .map(|p| p.split_whitespace().next().unwrap_or("").to_lowercase())
+        .collect()
+}
+
+/// When in their leg the tours first fell (`fall_legs`): per form of the leg (rows),
+/// the tours whose first fall came in the leg's first [`LEG_START`] s, by the form
+/// before it (the tour's first leg starts standing), and those that fell later.
+/// Empty for a folder written before the column was recorded.
+fn leg_start_table(runs: &Table) -> anyhow::Result<String> {
+    if !runs.header.iter().any(|h| h == "fall_legs") {
+        return Ok(String::new());
+    }
+    let before = ["start", FORMS[0], FORMS[1], FORMS[2], FORMS[3]];
+    // Per form: tours by the form before (in `before`'s order) and later.
+    let mut counts = BTreeMap::<String, [usize; 6]>::new();
+    for r in 0..runs.rows.len() {
+        let Some(first) = fall_list(runs, r, "fall_legs")?.into_iter().next() else {
+            continue;
+        };
+        let bad = || anyhow::anyhow!("row {r}: fall leg `{first}` is not n:seconds");
+        let (n, t) = first.split_once(':').ok_or_else(bad)?;
+        let (n, t): (usize, f64) = (n.parse().map_err(|_| bad())?, t.parse().map_err(|_| bad())?);
+        let forms = leg_forms(runs.str(r, "instructions")?);
+        if n == 0 || n > forms.len() {
+            bail!(
+                "row {r}: fall in instruction {n} of a tour of {} legs",
+                forms.len()
+            );
+        }
+        let col = if t >= LEG_START {
+            5
+        } else if n == 1 {
+            0
+        } else {
+            let prev = &forms[n - 2];
+            before.iter().position(|f| f == prev).ok_or_else(|| {
+                anyhow::anyhow!("row {r}: unknown form `{prev}` (one of {FORMS:?})")
+            })?
+        };
+        counts.entry(forms[n - 1].clone()).or_default()[col] += 1;
+    }
+    let mut md = format!(
+        "\n\nWhen in its leg each tour first fell: tours whose first fall came in a leg's first \
+         {LEG_START} s, by the form of the leg before it (start: the tour's first leg, from \
+         standing), and later in a leg; the row is the form of the leg it fell in.\n\n"
+    );
+    let names: Vec<String> = before
+        .iter()
+        .map(|f| format!("first {LEG_START} s after {f}"))
+        .chain(["later".to_string()])
+        .collect();
+    table_head(&mut md, names.iter().map(String::as_str));
+    let mut forms: Vec<String> = FORMS.iter().map(|f| f.to_string()).collect();
+    forms.extend(
+        counts
+            .keys()
+            .filter(|f| !FORMS.contains(&f.as_str()))
+            .cloned(),
+    );
+    for f in forms {
+        let row = counts.get(&f).copied().unwrap_or_default();
+        md.push_str(&format!("| {f} |"));
+        for c in row {
+            md.push_str(&format!(" {c} |"));
+        }
+        md.push('\n');
+    }
+    md.pop();
+    Ok(md)
+}
+
+const COLUMNS: [&str; 23] = [
     "job",
     "scene_seed",
     "instructions",
@@ -309,6 +390,7 @@ const COLUMNS: [&str; 22] = [
     "replans",
     "fall_sites",
     "fall_postures",
+    "fall_legs",
     "digest",
     "error",
 ];
@@ -388,6 +470,7 @@ impl Experiment for RandomScenes {
             ep.replans.to_string(),
             ep.fall_sites_field(),
             ep.fall_postures_field(),
+            ep.fall_legs_field(),
             format!("{:016x}", ep.digest),
             field(
                 ep.planning_error
@@ -465,7 +548,7 @@ impl Experiment for RandomScenes {
              Causes are assigned in this order: planning (no route at the start, or the \
              planner flagged the rest infeasible), error (a component failed), fall, collision \
              (a wall, ceiling or moving obstacle touched and the tour unfinished), timeout.\n\n\
-             ![outcomes](random.png)\n\n{}{}{}",
+             ![outcomes](random.png)\n\n{}{}{}{}",
             mean(&plen),
             mean(&ptime),
             mean(&reached),
@@ -473,6 +556,7 @@ impl Experiment for RandomScenes {
             mean(&z),
             fall_table(runs)?,
             posture_table(runs)?,
+            leg_start_table(runs)?,
             replay_note(runs, meta, out)?,
         ));
         let mut csv = Table {
@@ -650,5 +734,54 @@ mod tests {
             rows: vec![vec!["0".into(), "crawl@flat".into()]],
         };
         assert_eq!(posture_table(&old).unwrap(), "");
+    }
+
+    #[test]
+    fn the_leg_start_table_sorts_first_falls_by_the_form_before_them() {
+        let tour = "Crawl from the rock to the kiosk; then walk to the well; then walk to the car";
+        let table = |legs: [&str; 4]| Table {
+            header: ["job", "instructions", "fall_legs"]
+                .map(String::from)
+                .to_vec(),
+            rows: legs
+                .iter()
+                .enumerate()
+                .map(|(k, l)| vec![k.to_string(), tour.to_string(), l.to_string()])
+                .collect(),
+        };
+        // A walk just up from the crawl, the same walk later, a crawl getting down
+        // from standing (and a second fall that does not count), no fall.
+        let md = leg_start_table(&table(["2:1.50", "2:9.00", "1:0.40;3:0.50", ""])).unwrap();
+        let row = |form: &str| {
+            md.lines()
+                .find(|l| l.starts_with(&format!("| {form} |")))
+                .unwrap_or_else(|| panic!("no row {form} in {md}"))
+                .split('|')
+                .skip(2)
+                .map(|c| c.trim().to_string())
+                .filter(|c| !c.is_empty())
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(row("walk"), ["0", "1", "0", "0", "0", "1"], "{md}");
+        assert_eq!(row("crawl"), ["1", "0", "0", "0", "0", "0"], "{md}");
+        assert_eq!(row("run"), ["0"; 6], "{md}");
+        // A third walk just after a walk.
+        let md2 = leg_start_table(&table(["3:0.10", "", "", ""])).unwrap();
+        assert!(md2.contains("| walk | 0 | 0 | 0 | 1 | 0 | 0 |"), "{md2}");
+        // A fall in an instruction the tour does not have, or a garbled field.
+        let e = leg_start_table(&table(["4:1.0", "", "", ""]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("instruction 4 of a tour of 3 legs"), "{e}");
+        let e = leg_start_table(&table(["2-1.0", "", "", ""]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`2-1.0` is not n:seconds"), "{e}");
+        // A folder from before the column: no table.
+        let old = Table {
+            header: vec!["job".into(), "instructions".into()],
+            rows: vec![vec!["0".into(), tour.into()]],
+        };
+        assert_eq!(leg_start_table(&old).unwrap(), "");
     }
 }
