@@ -127,6 +127,35 @@ fn landmark_name<'a>(words: &'a [&'a str]) -> String {
     w.join(" ")
 }
 
+/// The locomotion of each instruction in `text`, without a scene: the verbs alone
+/// (what a table over many scenes' tours needs; [`parse_instructions`] also
+/// resolves the landmarks).
+pub fn instruction_forms(text: &str) -> Result<Vec<Locomotion>, PlanError> {
+    clauses(text)
+        .iter()
+        .enumerate()
+        .map(|(index, clause)| {
+            let words: Vec<&str> = clause.split_whitespace().collect();
+            clause_verb(index, clause, &words).map(|(l, _)| l)
+        })
+        .collect()
+}
+
+/// The verb of clause `index` (its `words`), or the error that names it and the
+/// verbs allowed.
+fn clause_verb(
+    index: usize,
+    clause: &str,
+    words: &[&str],
+) -> Result<(Locomotion, usize), PlanError> {
+    verb_of(words).ok_or_else(|| PlanError::UnknownVerb {
+        index,
+        text: clause.to_string(),
+        verb: words.first().unwrap_or(&"").to_string(),
+        valid: VALID_VERBS.iter().map(|s| s.to_string()).collect(),
+    })
+}
+
 /// Parse one or several instructions against the scene's landmarks.
 pub fn parse_instructions(text: &str, scene: &Scene) -> Result<Vec<Instruction>, PlanError> {
     let valid_landmarks = || {
@@ -139,14 +168,7 @@ pub fn parse_instructions(text: &str, scene: &Scene) -> Result<Vec<Instruction>,
     let mut out = Vec::new();
     for (index, clause) in clauses(text).into_iter().enumerate() {
         let words: Vec<&str> = clause.split_whitespace().collect();
-        let Some((locomotion, used)) = verb_of(&words) else {
-            return Err(PlanError::UnknownVerb {
-                index,
-                text: clause.clone(),
-                verb: words.first().unwrap_or(&"").to_string(),
-                valid: VALID_VERBS.iter().map(|s| s.to_string()).collect(),
-            });
-        };
+        let (locomotion, used) = clause_verb(index, &clause, &words)?;
         let rest = &words[used..];
         let from = rest.iter().position(|w| *w == "from");
         let to = rest.iter().rposition(|w| *w == "to");
@@ -229,6 +251,29 @@ mod tests {
         assert_eq!(v.len(), 2);
         assert_eq!(v[1].locomotion, Locomotion::Crawl);
         assert_eq!(v[1].target, "bench");
+    }
+
+    #[test]
+    fn the_forms_alone_need_no_scene_and_agree_with_the_full_parse() {
+        let text = "Run from the tree to the car; then walk crouching to the bench, then crawl to \
+                    the moon";
+        assert_eq!(
+            instruction_forms(text).unwrap(),
+            [Locomotion::Run, Locomotion::CrouchWalk, Locomotion::Crawl]
+        );
+        let known = "Run from the tree to the car, then crouch walk to the bench";
+        let parsed: Vec<Locomotion> = parse_instructions(known, &flat_scene())
+            .unwrap()
+            .iter()
+            .map(|i| i.locomotion)
+            .collect();
+        assert_eq!(instruction_forms(known).unwrap(), parsed);
+        match instruction_forms("walk to the car, then fly to the tree") {
+            Err(e @ PlanError::UnknownVerb { index: 1, .. }) => {
+                assert!(e.to_string().contains("`fly`"), "{e}");
+            }
+            other => panic!("{other:?}"),
+        }
     }
 
     #[test]

@@ -38,7 +38,9 @@ pub use dynamic::{
 };
 pub use error::{PlanError, SpeedFailure, UnreachableReason};
 pub use grid::PlanGrid;
-pub use instructions::{Instruction, Locomotion, Source, VALID_VERBS, parse_instructions};
+pub use instructions::{
+    Instruction, Locomotion, Source, VALID_VERBS, instruction_forms, parse_instructions,
+};
 pub use planner::{
     PlanStatus, Planner, PlannerInput, PlannerOutput, Progress, ReplanReason, START_HEADING_SPAN,
 };

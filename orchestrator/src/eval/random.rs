@@ -15,7 +15,7 @@ use plamo_scenes::Scene;
 use plotters::style::RGBColor;
 use serde::{Deserialize, Serialize};
 
-use super::episode::{EpisodeSpec, TIME_LIMIT_EXTRA, TIME_LIMIT_FACTOR, run_episode};
+use super::episode::{EpisodeSpec, TIME_LIMIT_EXTRA, TIME_LIMIT_FACTOR, run_episode, verb};
 use super::fall_posture::{FallPosture, PELVIS_UP, ROLLED_FROM, STEP_UNDER_HEAD};
 use super::ground::GroundKind;
 use super::plot::{Bar, bars};
@@ -230,6 +230,18 @@ fn fall_table(runs: &Table) -> anyhow::Result<String> {
     Ok(md)
 }
 
+/// The forms a table has rows for: the tours' four, then each other one `seen`
+/// (rows merged from a sweep with other forms), once each.
+fn row_forms<'a>(seen: impl IntoIterator<Item = &'a str>) -> Vec<String> {
+    let mut forms: Vec<String> = FORMS.iter().map(|f| f.to_string()).collect();
+    for f in seen {
+        if !forms.iter().any(|g| g == f) {
+            forms.push(f.to_string());
+        }
+    }
+    forms
+}
+
 /// Falls by form and the body's posture at the fall (`eval::fall_posture`), from
 /// `fall_sites` and `fall_postures`; empty for a folder written before the postures
 /// were recorded.
@@ -269,13 +281,7 @@ fn posture_table(runs: &Table) -> anyhow::Result<String> {
          the head ahead of / behind the pelvis (`eval::fall_posture`).\n\n",
     );
     table_head(&mut md, FallPosture::ALL.iter().map(|p| p.name()));
-    let mut forms: Vec<String> = FORMS.iter().map(|f| f.to_string()).collect();
-    for (f, _) in counts.keys() {
-        if !forms.contains(f) {
-            forms.push(f.clone());
-        }
-    }
-    for f in forms {
+    for f in row_forms(counts.keys().map(|(f, _)| f.as_str())) {
         md.push_str(&format!("| {f} |"));
         for p in FallPosture::ALL {
             let (n, first) = counts.get(&(f.clone(), p)).copied().unwrap_or_default();
@@ -293,15 +299,6 @@ fn posture_table(runs: &Table) -> anyhow::Result<String> {
 /// as long.
 const LEG_START: f64 = 4.0;
 
-/// Each leg's form in a tour's text as [`tour`] writes it ("Run from the rock to the
-/// kiosk; then walk to ..."): the first word of the text and of every part after a
-/// "then ".
-fn leg_forms(text: &str) -> Vec<String> {
-    text.split("then ")
-        .map(|p| p.split_whitespace().next().unwrap_or("").to_lowercase())
-        .collect()
-}
-
 /// When in their leg the tours first fell (`fall_legs`): per form of the leg (rows),
 /// the tours whose first fall came in the leg's first [`LEG_START`] s, by the form
 /// before it (the tour's first leg starts standing), and those that fell later.
@@ -312,7 +309,7 @@ fn leg_start_table(runs: &Table) -> anyhow::Result<String> {
     }
     let before = ["start", FORMS[0], FORMS[1], FORMS[2], FORMS[3]];
     // Per form: tours by the form before (in `before`'s order) and later.
-    let mut counts = BTreeMap::<String, [usize; 6]>::new();
+    let mut counts = BTreeMap::<&str, [usize; 6]>::new();
     for r in 0..runs.rows.len() {
         let Some(first) = fall_list(runs, r, "fall_legs")?.into_iter().next() else {
             continue;
@@ -320,7 +317,11 @@ fn leg_start_table(runs: &Table) -> anyhow::Result<String> {
         let bad = || anyhow::anyhow!("row {r}: fall leg `{first}` is not n:seconds");
         let (n, t) = first.split_once(':').ok_or_else(bad)?;
         let (n, t): (usize, f64) = (n.parse().map_err(|_| bad())?, t.parse().map_err(|_| bad())?);
-        let forms = leg_forms(runs.str(r, "instructions")?);
+        let forms: Vec<&str> = plamo_planner::instruction_forms(runs.str(r, "instructions")?)
+            .map_err(|e| anyhow::anyhow!("row {r}: {e}"))?
+            .into_iter()
+            .map(verb)
+            .collect();
         if n == 0 || n > forms.len() {
             bail!(
                 "row {r}: fall in instruction {n} of a tour of {} legs",
@@ -332,12 +333,12 @@ fn leg_start_table(runs: &Table) -> anyhow::Result<String> {
         } else if n == 1 {
             0
         } else {
-            let prev = &forms[n - 2];
-            before.iter().position(|f| f == prev).ok_or_else(|| {
+            let prev = forms[n - 2];
+            before.iter().position(|f| *f == prev).ok_or_else(|| {
                 anyhow::anyhow!("row {r}: unknown form `{prev}` (one of {FORMS:?})")
             })?
         };
-        counts.entry(forms[n - 1].clone()).or_default()[col] += 1;
+        counts.entry(forms[n - 1]).or_default()[col] += 1;
     }
     let mut md = format!(
         "\n\nWhen in its leg each tour first fell: tours whose first fall came in a leg's first \
@@ -350,15 +351,8 @@ fn leg_start_table(runs: &Table) -> anyhow::Result<String> {
         .chain(["later".to_string()])
         .collect();
     table_head(&mut md, names.iter().map(String::as_str));
-    let mut forms: Vec<String> = FORMS.iter().map(|f| f.to_string()).collect();
-    forms.extend(
-        counts
-            .keys()
-            .filter(|f| !FORMS.contains(&f.as_str()))
-            .cloned(),
-    );
-    for f in forms {
-        let row = counts.get(&f).copied().unwrap_or_default();
+    for f in row_forms(counts.keys().copied()) {
+        let row = counts.get(f.as_str()).copied().unwrap_or_default();
         md.push_str(&format!("| {f} |"));
         for c in row {
             md.push_str(&format!(" {c} |"));
