@@ -452,3 +452,46 @@ fn compare_pairs_two_random_sweeps_tour_by_tour() {
         "{err}"
     );
 }
+
+/// `plamo eval locomotion` splits each cell's XY-err into its lag along the path and its
+/// drift across it: neither part exceeds the whole, and a crawl that starts standing
+/// (1.5 s to get down behind a plan already moving) lags its plan on the route.
+#[test]
+fn the_locomotion_table_splits_xy_error_into_lag_and_drift() {
+    let out = tmp("locomotion-split");
+    let dir = out.to_str().unwrap();
+    let (ok, err) = plamo(&[
+        "eval",
+        "locomotion",
+        "--runs",
+        "1",
+        "--duration",
+        "3",
+        "--quiet",
+        "--out",
+        dir,
+    ]);
+    assert!(ok, "{err}");
+    let md = std::fs::read_to_string(out.join("locomotion.md")).unwrap();
+    assert!(md.contains("lag (along the path"), "{md}");
+    let cells: Vec<Vec<serde_json::Value>> =
+        serde_json::from_str(&std::fs::read_to_string(out.join("locomotion.json")).unwrap())
+            .unwrap();
+    for (t, row) in cells.iter().enumerate() {
+        for (f, c) in row.iter().enumerate() {
+            let get = |k: &str| c[k].as_f64().unwrap_or_else(|| panic!("{k} in {c}"));
+            let (xy, lag, cross) = (get("xy"), get("lag"), get("cross_track"));
+            assert!(
+                lag.abs() <= xy + 1e-9 && (0.0..=xy + 1e-9).contains(&cross),
+                "terrain {t} form {f}: xy {xy} lag {lag} cross {cross}"
+            );
+        }
+    }
+    let crawl_flat = &cells[0][0];
+    let lag = crawl_flat["lag"].as_f64().unwrap();
+    let cross = crawl_flat["cross_track"].as_f64().unwrap();
+    assert!(
+        lag > 0.3 && cross < lag,
+        "crawl on flat ground: lag {lag}, cross {cross}"
+    );
+}

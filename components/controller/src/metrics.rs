@@ -19,6 +19,13 @@
 //!
 //! `r_tau` is their sum (at most 3 plus the body term). ProtoMotions' path follower
 //! averages position and height; we keep the paper's sum and also report each term.
+//!
+//! # Lag and drift
+//!
+//! The XY error is split along the plan's direction of travel at the same time: the
+//! along-track part is schedule (the head behind or ahead of its point), the
+//! cross-track part is the head off the route. A constant-speed path the humanoid
+//! follows exactly but slower has all of its XY error along the track.
 
 use serde::{Deserialize, Serialize};
 
@@ -133,6 +140,19 @@ pub struct MetricsSummary {
     pub xy_err_mean: f64,
     /// Largest horizontal head error \[m\].
     pub xy_err_max: f64,
+    /// Mean along-track part of the XY error, signed: positive while the head is
+    /// behind its plan point \[m\]. Over the steps on which the plan moves (see
+    /// [`Self::moving_steps`]).
+    #[serde(default)]
+    pub lag_mean: f64,
+    /// Mean absolute cross-track part of the XY error: how far the head is off the
+    /// route, whatever the schedule \[m\]. Over the same steps as `lag_mean`.
+    #[serde(default)]
+    pub cross_track_mean: f64,
+    /// Steps on which the plan's direction of travel had a horizontal part (the
+    /// steps `lag_mean` and `cross_track_mean` average over).
+    #[serde(default)]
+    pub moving_steps: u64,
     /// Mean absolute head height error \[m\].
     pub z_err_mean: f64,
     /// Largest absolute head height error \[m\].
@@ -196,6 +216,9 @@ pub struct MetricsAccumulator {
     reward: RewardTerms,
     xy_sum: f64,
     xy_max: f64,
+    lag_sum: f64,
+    cross_sum: f64,
+    moving_steps: u64,
     z_sum: f64,
     z_max: f64,
     falls: u32,
@@ -227,6 +250,9 @@ impl MetricsAccumulator {
             reward: RewardTerms::default(),
             xy_sum: 0.0,
             xy_max: 0.0,
+            lag_sum: 0.0,
+            cross_sum: 0.0,
+            moving_steps: 0,
             z_sum: 0.0,
             z_max: 0.0,
             falls: 0,
@@ -253,7 +279,15 @@ impl MetricsAccumulator {
         self.reward.dir += r.dir;
         self.reward.body += r.body;
         self.reward.total += r.total;
-        let xy = ((s.target[0] - s.head[0]).powi(2) + (s.target[1] - s.head[1]).powi(2)).sqrt();
+        let (ex, ey) = (s.target[0] - s.head[0], s.target[1] - s.head[1]);
+        let xy = ex.hypot(ey);
+        let dir_len = s.path_dir[0].hypot(s.path_dir[1]);
+        if dir_len > 1e-9 {
+            let (ux, uy) = (s.path_dir[0] / dir_len, s.path_dir[1] / dir_len);
+            self.lag_sum += ex * ux + ey * uy;
+            self.cross_sum += (ex * uy - ey * ux).abs();
+            self.moving_steps += 1;
+        }
         let z = (s.target[2] - s.head[2]).abs();
         self.xy_sum += xy;
         self.xy_max = self.xy_max.max(xy);
@@ -321,6 +355,9 @@ impl MetricsAccumulator {
             },
             xy_err_mean: mean(self.xy_sum),
             xy_err_max: self.xy_max,
+            lag_mean: self.lag_sum / self.moving_steps.max(1) as f64,
+            cross_track_mean: self.cross_sum / self.moving_steps.max(1) as f64,
+            moving_steps: self.moving_steps,
             z_err_mean: mean(self.z_sum),
             z_err_max: self.z_max,
             falls: self.falls,
@@ -429,5 +466,34 @@ mod tests {
         assert_eq!(m.completion_time_s, Some(3.5));
         let json = serde_json::to_string(&m).unwrap();
         assert!(json.contains("residual_force_mean"));
+    }
+
+    #[test]
+    fn xy_error_splits_into_lag_along_the_path_and_drift_across_it() {
+        let mut acc = MetricsAccumulator::new(PathRewardWeights::default(), 700.0, vec![]);
+        // Path heading +y: a head 0.3 m behind and 0.4 m to its side.
+        let mut s = sample(0.0, [0.4, -0.3, 1.4], [0.0, 0.0, 1.4]);
+        s.path_dir = [0.0, 2.0, 0.0];
+        acc.push(&s);
+        // Ahead of its point by 0.1 m, on the route.
+        s.head = [0.0, 0.1, 1.4];
+        acc.push(&s);
+        // A plan standing still adds to the XY error only.
+        s.head = [1.0, 0.0, 1.4];
+        s.path_dir = [0.0, 0.0, 0.0];
+        acc.push(&s);
+        let m = acc.summary();
+        assert_eq!(m.moving_steps, 2);
+        assert!(
+            (m.lag_mean - (0.3 - 0.1) / 2.0).abs() < 1e-12,
+            "{}",
+            m.lag_mean
+        );
+        assert!((m.cross_track_mean - 0.4 / 2.0).abs() < 1e-12);
+        assert!((m.xy_err_mean - (0.5 + 0.1 + 1.0) / 3.0).abs() < 1e-12);
+        // Older summaries without the split still read.
+        let old = r#"{"steps":1,"duration_s":0,"mean_reward":{"pos":1,"height":1,"dir":1,"body":0,"total":3},"xy_err_mean":0,"xy_err_max":0,"z_err_mean":0,"z_err_max":0,"falls":0,"fallen_fraction":0,"landmarks_reached":[],"landmarks_expected":[],"success":true,"completion_time_s":null,"residual_steps":0,"residual_force_mean":0,"residual_force_peak":0,"residual_torque_mean":0,"residual_torque_peak":0}"#;
+        let back: MetricsSummary = serde_json::from_str(old).unwrap();
+        assert_eq!(back.moving_steps, 0);
     }
 }

@@ -274,6 +274,10 @@ const PAPER: [[(f64, f64); 4]; 4] = [
 #[derive(Debug, Clone, Copy, Default, serde::Serialize)]
 struct Cell {
     xy: f64,
+    /// The XY error's along-track part (+ behind the plan) and its cross-track part,
+    /// means over the runs \[m\] (see `plamo_controller::metrics`).
+    lag: f64,
+    cross_track: f64,
     z: f64,
     falls_per_min: f64,
     fallen_fraction: f64,
@@ -383,6 +387,8 @@ fn locomotion(a: LocomotionArgs) -> anyhow::Result<ExitCode> {
         let c = &mut cells[t][f];
         let k = a.runs as f64;
         c.xy += m.xy_err_mean / k;
+        c.lag += m.lag_mean / k;
+        c.cross_track += m.cross_track_mean / k;
         c.z += m.z_err_mean / k;
         c.falls_per_min += f64::from(m.falls) / m.duration_s.max(1e-9) * 60.0 / k;
         c.fallen_fraction += m.fallen_fraction / k;
@@ -427,6 +433,19 @@ fn markdown(cells: &[[Cell; 4]; 4], a: &LocomotionArgs) -> String {
         for (f, c) in row.iter().enumerate() {
             let (px, pz) = PAPER[t][f];
             s.push_str(&format!(" {:.2} / {:.2} ({px:.2} / {pz:.2}) |", c.xy, c.z));
+        }
+        s.push('\n');
+    }
+    s.push_str(
+        "\nThe XY-err split along the plan's direction of travel: lag (along the path, + \
+         behind the plan's point) / off the route (cross-track) [m]; a humanoid on the \
+         route but slower than its plan has all of its XY-err as lag:\n\n\
+         | terrain | crawl | crouch-walk | walk | run |\n|---|---|---|---|---|\n",
+    );
+    for (t, row) in cells.iter().enumerate() {
+        s.push_str(&format!("| {} |", TERRAINS[t]));
+        for c in row {
+            s.push_str(&format!(" {:.2} / {:.2} |", c.lag, c.cross_track));
         }
         s.push('\n');
     }

@@ -344,7 +344,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
             all_ok &= r.success;
             let m = &r.metrics;
             say!(
-                "  agent {k} [{}] {text:<40} {:>6.1} s  xy {:.2} m  z {:.2} m  falls {}  residual {:.1}% / {:.1}% m g, {:.0} / {:.0} N m",
+                "  agent {k} [{}] {text:<40} {:>6.1} s  xy {:.2} m (lag {:.2}, off route {:.2})  z {:.2} m  falls {}  residual {:.1}% / {:.1}% m g, {:.0} / {:.0} N m",
                 if r.success {
                     "ok"
                 } else if r.reached {
@@ -354,6 +354,8 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
                 },
                 r.time_s,
                 m.xy_err_mean,
+                m.lag_mean,
+                m.cross_track_mean,
                 m.z_err_mean,
                 m.falls,
                 100.0 * m.residual_force_mean,
