@@ -280,7 +280,8 @@ impl MetricsAccumulator {
         self.reward.body += r.body;
         self.reward.total += r.total;
         let (ex, ey) = (s.target[0] - s.head[0], s.target[1] - s.head[1]);
-        let xy = ex.hypot(ey);
+        // Not `hypot`: the summaries (and the tuner's costs) stay bit-identical to before.
+        let xy = (ex.powi(2) + ey.powi(2)).sqrt();
         let dir_len = s.path_dir[0].hypot(s.path_dir[1]);
         if dir_len > 1e-9 {
             let (ux, uy) = (s.path_dir[0] / dir_len, s.path_dir[1] / dir_len);
