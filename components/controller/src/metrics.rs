@@ -329,6 +329,7 @@ impl MetricsAccumulator {
     pub fn summary(&self) -> MetricsSummary {
         let n = self.steps.max(1) as f64;
         let mean = |x: f64| x / n;
+        let per_moving = |x: f64| x / self.moving_steps.max(1) as f64;
         let success = self
             .expected
             .iter()
@@ -356,8 +357,8 @@ impl MetricsAccumulator {
             },
             xy_err_mean: mean(self.xy_sum),
             xy_err_max: self.xy_max,
-            lag_mean: self.lag_sum / self.moving_steps.max(1) as f64,
-            cross_track_mean: self.cross_sum / self.moving_steps.max(1) as f64,
+            lag_mean: per_moving(self.lag_sum),
+            cross_track_mean: per_moving(self.cross_sum),
             moving_steps: self.moving_steps,
             z_err_mean: mean(self.z_sum),
             z_err_max: self.z_max,

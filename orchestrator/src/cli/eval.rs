@@ -428,48 +428,47 @@ fn markdown(cells: &[[Cell; 4]; 4], a: &LocomotionArgs) -> String {
         .filter_map(|(flag, p)| p.as_ref().map(|p| format!(" {flag} {}", p.display())))
         .collect::<String>()
     );
-    for (t, row) in cells.iter().enumerate() {
-        s.push_str(&format!("| {} |", TERRAINS[t]));
-        for (f, c) in row.iter().enumerate() {
-            let (px, pz) = PAPER[t][f];
-            s.push_str(&format!(" {:.2} / {:.2} ({px:.2} / {pz:.2}) |", c.xy, c.z));
-        }
-        s.push('\n');
-    }
+    push_rows(&mut s, cells, |t, f, c| {
+        let (px, pz) = PAPER[t][f];
+        format!("{:.2} / {:.2} ({px:.2} / {pz:.2})", c.xy, c.z)
+    });
     s.push_str(
         "\nThe XY-err split along the plan's direction of travel: lag (along the path, + \
          behind the plan's point) / off the route (cross-track) [m]; a humanoid on the \
          route but slower than its plan has all of its XY-err as lag:\n\n\
          | terrain | crawl | crouch-walk | walk | run |\n|---|---|---|---|---|\n",
     );
-    for (t, row) in cells.iter().enumerate() {
-        s.push_str(&format!("| {} |", TERRAINS[t]));
-        for c in row {
-            s.push_str(&format!(" {:.2} / {:.2} |", c.lag, c.cross_track));
-        }
-        s.push('\n');
-    }
+    push_rows(&mut s, cells, |_, _, c| {
+        format!("{:.2} / {:.2}", c.lag, c.cross_track)
+    });
     s.push_str(
         "\nFalls per minute / fraction of steps fallen / residual force mean, peak [m*g] / \
          residual torque mean, peak [N m]:\n\n\
          | terrain | crawl | crouch-walk | walk | run |\n|---|---|---|---|---|\n",
     );
+    push_rows(&mut s, cells, |_, _, c| {
+        format!(
+            "{:.1} / {:.2} / {:.2}, {:.2} / {:.0}, {:.0}",
+            c.falls_per_min,
+            c.fallen_fraction,
+            c.residual_mean,
+            c.residual_peak,
+            c.torque_mean,
+            c.torque_peak
+        )
+    });
+    s
+}
+
+/// One markdown row per terrain, `cell(terrain, form, cell)` in each form's column.
+fn push_rows(s: &mut String, cells: &[[Cell; 4]; 4], cell: impl Fn(usize, usize, &Cell) -> String) {
     for (t, row) in cells.iter().enumerate() {
         s.push_str(&format!("| {} |", TERRAINS[t]));
-        for c in row {
-            s.push_str(&format!(
-                " {:.1} / {:.2} / {:.2}, {:.2} / {:.0}, {:.0} |",
-                c.falls_per_min,
-                c.fallen_fraction,
-                c.residual_mean,
-                c.residual_peak,
-                c.torque_mean,
-                c.torque_peak
-            ));
+        for (f, c) in row.iter().enumerate() {
+            s.push_str(&format!(" {} |", cell(t, f, c)));
         }
         s.push('\n');
     }
-    s
 }
 
 fn plot(cells: &[[Cell; 4]; 4], path: &std::path::Path) -> anyhow::Result<()> {
