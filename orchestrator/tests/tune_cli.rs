@@ -36,11 +36,15 @@ fn tuning_the_crawl_writes_a_crawl_file_that_loads() {
         physics.to_str().unwrap(),
         "--fall-cost",
         "5",
+        // A field beyond the crawl's built-in box, searched too.
+        "--search",
+        "max_speed=0.9..1.3",
         "--out",
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.contains(" --search max_speed=0.9..1.3 "), "{text}");
     assert!(text.starts_with("# Crawl parameters"), "{text}");
     assert!(
         text.contains("plamo tune --form crawl --budget 1"),
@@ -63,7 +67,7 @@ fn bad_tuning_arguments_are_refused_by_name() {
     let bad = dir.join("physics.toml");
     std::fs::write(&bad, "frction = 0.5\n").unwrap();
     let bad = bad.to_str().unwrap();
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 8] = [
         (&["--form", "hop"], "walk, run, crouch, crawl"),
         (&["--physics-params", bad, "--budget", "1"], "frction"),
         (
@@ -75,6 +79,13 @@ fn bad_tuning_arguments_are_refused_by_name() {
             &["--fall-cost", "-1", "--budget", "1"],
             "--fall-cost must be",
         ),
+        // A misspelt field is refused before any rollout, with the fields there are.
+        (
+            &["--form", "crawl", "--search", "max_sped=0.7..1.4"],
+            "its number fields: attitude_gain",
+        ),
+        (&["--search", "max_speed=0.7..1.4"], "`[walk]` section"),
+        (&["--search", "step_time=0.5"], "NAME=LO..HI"),
     ];
     for (args, needle) in cases {
         let o = plamo(args);

@@ -32,6 +32,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         },
         physics: Default::default(),
         fall_cost: None,
+        search: Vec::new(),
         // PLAMO_TUNE_TERRAINS=flat,rough,stairs tunes on terrain strips too.
         terrains: std::env::var("PLAMO_TUNE_TERRAINS")
             .unwrap_or_else(|_| "flat".into())

@@ -45,6 +45,7 @@ pub use rollout::{
 };
 pub use settings::{ControllerSettings, GRAVITY};
 pub use tune::{
-    Cost, Form, Generation, RESIDUAL_COST, Rng, Sample, SepCmaEs, TRACKING_COST, TrackingGuard,
-    TuneSettings, TunedParams, evaluate, start_like, terrain_scene, to_toml, tune, tune_with,
+    Cost, Form, Generation, RESIDUAL_COST, Rng, Sample, SearchField, SepCmaEs, TRACKING_COST,
+    TrackingGuard, TuneSettings, TunedParams, evaluate, search_box, start_like, terrain_scene,
+    to_toml, tune, tune_with,
 };

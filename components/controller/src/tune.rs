@@ -5,15 +5,18 @@
 //! candidates are drawn from a seeded generator, rayon results are collected in order).
 
 mod cmaes;
+mod search_box;
 
 use rayon::prelude::*;
 
 use plamo_physics::{BackendKind, PhysicsError, PhysicsSettings};
 
 pub use cmaes::{Rng, Sample, SepCmaEs};
+pub use search_box::{SearchField, search_box, start_like};
+use search_box::{decode, encode};
 
 use crate::error::{ControllerError, Result};
-use crate::gait::{CrawlParams, FormParams, GaitParams, ModelBasedController};
+use crate::gait::{CrawlParams, GaitParams, ModelBasedController};
 use crate::rollout::{
     ArcPath, DropPath, HeadPath, RampedPath, RisingPath, START_ACCEL, StraightPath, TurnPath,
     ceiling_scene, flat_scene, run_path_with,
@@ -83,16 +86,6 @@ impl Form {
             Form::Walk | Form::Crouch => 1.0,
         }
     }
-
-    /// The biped's section of the form; `None` for the crawl, which has its own file.
-    fn params(self, p: &mut GaitParams) -> Option<&mut FormParams> {
-        match self {
-            Form::Walk => Some(&mut p.walk),
-            Form::Run => Some(&mut p.run),
-            Form::Crouch => Some(&mut p.crouch),
-            Form::Crawl => None,
-        }
-    }
 }
 
 /// What a tuning run starts from and returns: the controller's two parameter files,
@@ -135,153 +128,6 @@ impl TunedParams {
     }
 }
 
-/// Tuned fields with their search box (units of the field, see [`FormParams`] and,
-/// for `residual.*`, [`crate::ResidualGains`], which all forms share).
-const TUNED: [(&str, f64, f64); 20] = [
-    ("step_time", 0.25, 0.55),
-    ("swing_height", 0.04, 0.16),
-    ("pelvis_height", 0.80, 0.93),
-    ("trunk_pitch", -0.15, 0.30),
-    ("lean_per_speed", 0.0, 0.15),
-    ("foot_fwd_gain", 0.05, 0.40),
-    ("foot_err_gain", 0.0, 0.25),
-    ("foot_width", 0.05, 0.14),
-    ("foot_lat_gain", 0.0, 0.45),
-    ("torso_kp", 200.0, 1500.0),
-    ("torso_kd", 10.0, 150.0),
-    ("stance_push", 0.0, 0.2),
-    ("swing_comp", 0.0, 1.0),
-    ("speed_ki", 0.0, 0.5),
-    ("step_time_per_speed", 0.0, 0.15),
-    ("push_err_gain", 0.0, 0.3),
-    ("swing_lead", 0.0, 0.15),
-    // The residual should only catch what the gait cannot do: its gains are tuned
-    // with the gait, so the cost's residual term can push them down.
-    ("residual.vel_gain", 0.0, 4.0),
-    ("residual.height_gain", 0.0, 60.0),
-    ("residual.height_damping", 0.0, 10.0),
-];
-
-/// Crouch-walk search box: a head at 0.8 m needs a low pelvis and a strong lean (the
-/// spine carries part of it); the residual gains stay the walk's.
-const TUNED_CROUCH: [(&str, f64, f64); 18] = [
-    ("step_time", 0.25, 0.6),
-    ("swing_height", 0.04, 0.14),
-    ("pelvis_height", 0.45, 0.75),
-    ("trunk_pitch", 0.0, 0.8),
-    ("spine_pitch", 0.0, 1.0),
-    ("foot_fwd_gain", 0.05, 0.40),
-    ("foot_err_gain", 0.0, 0.25),
-    ("foot_width", 0.05, 0.16),
-    ("foot_lat_gain", 0.0, 0.45),
-    ("torso_kp", 200.0, 1500.0),
-    ("torso_kd", 10.0, 150.0),
-    ("stance_push", 0.0, 0.2),
-    ("swing_comp", 0.0, 1.0),
-    ("speed_ki", 0.0, 0.5),
-    ("lean_per_speed", 0.0, 0.15),
-    ("step_time_per_speed", 0.0, 0.15),
-    ("push_err_gain", 0.0, 0.3),
-    ("swing_lead", 0.0, 0.15),
-];
-
-/// Number of shared residual gains at the end of [`TUNED`]: only the walk search moves
-/// them (the run's search would change the walk's residual under it).
-const RESIDUAL_FIELDS: usize = 3;
-
-/// Crawl search box: the gait, its feedback and its residual gains, the fields the
-/// hand-run evolution strategy behind the shipped `crawl.toml` searched (posture and
-/// transitions stay as set by hand: a search on straight paths cannot see the 0.6 m
-/// ceiling the posture is made for). Boxes keep `min_cycle` below `cycle`.
-const TUNED_CRAWL: [(&str, f64, f64); 19] = [
-    ("attitude_gain", 0.0, 1.5),
-    ("height_gain_limbs", 0.0, 1.5),
-    ("cycle", 0.66, 1.0),
-    ("min_cycle", 0.4, 0.66),
-    ("max_stride", 0.15, 0.45),
-    ("duty", 0.6, 0.9),
-    ("fast_duty", 0.5, 0.8),
-    ("slip_gain", 0.0, 1.0),
-    ("max_slip", 0.0, 0.6),
-    ("vel_filter", 0.05, 1.0),
-    ("place_gain", 0.0, 0.3),
-    ("knee_lift", 0.03, 0.15),
-    ("hand_lift", 0.03, 0.15),
-    ("yaw_gain", 0.5, 4.0),
-    ("max_accel", 0.5, 4.0),
-    ("vel_gain", 0.0, 4.0),
-    ("rot_gain", 0.0, 300.0),
-    ("rot_damping", 0.0, 60.0),
-    ("yaw_torque_gain", 0.0, 300.0),
-];
-
-/// The search box of a form.
-fn tuned(form: Form) -> &'static [(&'static str, f64, f64)] {
-    match form {
-        Form::Crouch => &TUNED_CROUCH,
-        Form::Walk => &TUNED,
-        Form::Run => &TUNED[..TUNED.len() - RESIDUAL_FIELDS],
-        Form::Crawl => &TUNED_CRAWL,
-    }
-}
-
-fn crawl_field<'a>(c: &'a mut CrawlParams, name: &str) -> &'a mut f64 {
-    match name {
-        "attitude_gain" => &mut c.attitude_gain,
-        "height_gain_limbs" => &mut c.height_gain_limbs,
-        "cycle" => &mut c.cycle,
-        "min_cycle" => &mut c.min_cycle,
-        "max_stride" => &mut c.max_stride,
-        "duty" => &mut c.duty,
-        "fast_duty" => &mut c.fast_duty,
-        "slip_gain" => &mut c.slip_gain,
-        "max_slip" => &mut c.max_slip,
-        "vel_filter" => &mut c.vel_filter,
-        "place_gain" => &mut c.place_gain,
-        "knee_lift" => &mut c.knee_lift,
-        "hand_lift" => &mut c.hand_lift,
-        "yaw_gain" => &mut c.yaw_gain,
-        "max_accel" => &mut c.max_accel,
-        "vel_gain" => &mut c.vel_gain,
-        "rot_gain" => &mut c.rot_gain,
-        "rot_damping" => &mut c.rot_damping,
-        _ => &mut c.yaw_torque_gain,
-    }
-}
-
-fn field<'a>(p: &'a mut TunedParams, form: Form, name: &str) -> &'a mut f64 {
-    let g = &mut p.gait;
-    match name {
-        "residual.vel_gain" => return &mut g.residual.vel_gain,
-        "residual.height_gain" => return &mut g.residual.height_gain,
-        "residual.height_damping" => return &mut g.residual.height_damping,
-        _ => {}
-    }
-    let Some(f) = form.params(g) else {
-        return crawl_field(&mut p.crawl, name);
-    };
-    match name {
-        "step_time" => &mut f.step_time,
-        "swing_height" => &mut f.swing_height,
-        "pelvis_height" => &mut f.pelvis_height,
-        "trunk_pitch" => &mut f.trunk_pitch,
-        "lean_per_speed" => &mut f.lean_per_speed,
-        "foot_fwd_gain" => &mut f.foot_fwd_gain,
-        "foot_err_gain" => &mut f.foot_err_gain,
-        "foot_width" => &mut f.foot_width,
-        "foot_lat_gain" => &mut f.foot_lat_gain,
-        "torso_kp" => &mut f.torso_kp,
-        "torso_kd" => &mut f.torso_kd,
-        "stance_push" => &mut f.stance_push,
-        "speed_ki" => &mut f.speed_ki,
-        "spine_pitch" => &mut f.spine_pitch,
-        "step_time_per_speed" => &mut f.step_time_per_speed,
-        "push_err_gain" => &mut f.push_err_gain,
-        "swing_lead" => &mut f.swing_lead,
-        _ => &mut f.swing_comp,
-    }
-}
-
 /// Tuning settings.
 #[derive(Debug, Clone)]
 pub struct TuneSettings {
@@ -318,6 +164,9 @@ pub struct TuneSettings {
     /// (3 for the run and the crawl, 1 for the walk and the crouch). The Table 2
     /// strips ask for no falls at all: a search there may weigh them up.
     pub fall_cost: Option<f64>,
+    /// Fields added to the form's built-in search box, or re-bounding one of its
+    /// fields ([`search_box`]); empty: the box the built-in files were made with.
+    pub search: Vec<SearchField>,
 }
 
 /// Cost of a rollout whose simulation diverged \[m-equivalent\]: ten of the costliest
@@ -619,47 +468,6 @@ fn evaluate_on(
     })
 }
 
-fn decode(base: &TunedParams, form: Form, x: &[f64]) -> TunedParams {
-    let mut p = *base;
-    for (&(name, lo, hi), v) in tuned(form).iter().zip(x) {
-        *field(&mut p, form, name) = lo + (hi - lo) * v.clamp(0.0, 1.0);
-    }
-    p
-}
-
-fn encode(base: &TunedParams, form: Form) -> Vec<f64> {
-    let mut p = *base;
-    tuned(form)
-        .iter()
-        .map(|&(name, lo, hi)| ((*field(&mut p, form, name) - lo) / (hi - lo)).clamp(0.0, 1.0))
-        .collect()
-}
-
-/// `base` with the searched parameters of `form` (residual gains aside) copied from
-/// the section of `like`: a search for the run can start from the tuned walk, whose
-/// gait at run speeds falls less than an untuned run section. The biped's forms
-/// only: the crawl shares no fields with them.
-pub fn start_like(base: &TunedParams, form: Form, like: Form) -> Result<TunedParams> {
-    if form == Form::Crawl || like == Form::Crawl {
-        return Err(ControllerError::InvalidSettings {
-            field: "start_like",
-            reason: format!(
-                "{form:?} cannot start like {like:?}: the crawl has its own parameters \
-                 (start-like works between walk, run and crouch)"
-            ),
-        });
-    }
-    let mut p = *base;
-    for &(name, _, _) in tuned(form) {
-        if name.starts_with("residual.") {
-            continue;
-        }
-        let v = *field(&mut p, like, name);
-        *field(&mut p, form, name) = v;
-    }
-    Ok(p)
-}
-
 /// Cost per metre of flat-ground XY error a candidate loses against the search's start
 /// beyond a [`TrackingGuard`]'s margin \[m-equivalent per m\]: 0.1 m more lag costs
 /// as much as one tour in ten failing at a fall cost of 10.
@@ -753,8 +561,9 @@ pub fn tune_with(
     cost: impl Fn(&TunedParams) -> Result<Cost> + Sync,
     mut on_generation: impl FnMut(&Generation),
 ) -> Result<(TunedParams, Cost)> {
+    let fields = search_box(s.form, &s.search)?;
     let mut rng = Rng::new(s.seed);
-    let mut es = SepCmaEs::new(encode(base, s.form), s.sigma0, 0);
+    let mut es = SepCmaEs::new(encode(base, s.form, &fields)?, s.sigma0, 0);
     let mut best = (*base, cost(base)?);
     for g in 1..=s.generations {
         let samples = es.ask(&mut rng);
@@ -764,7 +573,7 @@ pub fn tune_with(
         let evaluated: Vec<Result<(TunedParams, Cost)>> = samples
             .par_iter()
             .map(|smp| {
-                let p = decode(base, s.form, &smp.x);
+                let p = decode(base, s.form, &fields, &smp.x)?;
                 let c = match p.validate() {
                     Ok(()) => cost(&p)?,
                     Err(_) => Cost {

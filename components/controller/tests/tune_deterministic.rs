@@ -26,6 +26,7 @@ fn settings(form: Form, seed: u64, terrain: &str) -> TuneSettings {
         // A terrain strip, so the scenario's ground comes from the built-in scenes.
         terrains: vec![terrain.into()],
         fall_cost: None,
+        search: Vec::new(),
     }
 }
 

@@ -12,8 +12,8 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use plamo::tune_tours::TourObjective;
 use plamo_controller::{
-    ControllerSettings, CrawlParams, Form, GaitParams, TrackingGuard, TuneSettings, TunedParams,
-    start_like, tune, tune_with,
+    ControllerSettings, CrawlParams, Form, GaitParams, SearchField, TrackingGuard, TuneSettings,
+    TunedParams, search_box, start_like, tune, tune_with,
 };
 use plamo_physics::BackendKind;
 
@@ -81,6 +81,13 @@ pub struct TuneArgs {
     /// the run and the crawl, 1 for the walk and the crouch).
     #[arg(long, allow_negative_numbers = true)]
     fall_cost: Option<f64>,
+    /// A field to search beyond the form's built-in box, or a new range for one of its
+    /// fields, in the field's unit: NAME=LO..HI, e.g. `--search max_speed=0.7..1.4` for
+    /// the crawl, `--search residual.rot_gain=100..300` for the walk. Repeatable; any
+    /// number field of the form's section of the file (`[walk]`, `[run]`, `[crouch]`
+    /// and `residual.*` for the biped, the whole crawl file for the crawl).
+    #[arg(long, value_name = "NAME=LO..HI")]
+    search: Vec<String>,
     /// Output parameter file (default: gait.toml, or crawl.toml with `--form crawl`).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -125,6 +132,13 @@ pub fn run(args: TuneArgs) -> anyhow::Result<ExitCode> {
             "gait.toml"
         })
     });
+    let search = args
+        .search
+        .iter()
+        .map(|f| f.parse::<SearchField>())
+        .collect::<Result<Vec<_>, _>>()?;
+    // Checked before the first rollout: a typo in a field name fails at once.
+    search_box(form, &search)?;
     let physics = plamo::spec::physics_settings_or_default(args.physics_params.as_deref())
         .map_err(anyhow::Error::msg)?;
     let settings = TuneSettings {
@@ -142,6 +156,7 @@ pub fn run(args: TuneArgs) -> anyhow::Result<ExitCode> {
         terrains: args.terrains.split(',').map(|t| t.trim().into()).collect(),
         physics,
         fall_cost: args.fall_cost,
+        search: search.clone(),
     };
     let bar = ProgressBar::new(u64::from(args.budget));
     bar.set_style(
@@ -172,7 +187,7 @@ pub fn run(args: TuneArgs) -> anyhow::Result<ExitCode> {
         )
     };
     let command = format!(
-        "plamo tune --form {} --budget {} --seed {} --physics {} {objective}{}{}{}{} --out {}",
+        "plamo tune --form {} --budget {} --seed {} --physics {} {objective}{}{}{}{}{} --out {}",
         args.form,
         args.budget,
         args.seed,
@@ -192,6 +207,10 @@ pub fn run(args: TuneArgs) -> anyhow::Result<ExitCode> {
         args.fall_cost
             .map(|c| format!(" --fall-cost {c}"))
             .unwrap_or_default(),
+        search
+            .iter()
+            .map(|f| format!(" --search {f}"))
+            .collect::<String>(),
         out.display(),
     );
     // The guard checks its margin and prices the start before the tours are drawn,
