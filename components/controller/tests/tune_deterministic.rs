@@ -159,9 +159,11 @@ fn the_form_changing_grounds_change_the_rollouts() {
     // up at half the rollout (`rise`): same seed, same speeds, three different plans.
     let cost = |terrain| cost_on(Form::Crawl, 3, 4.0, terrain);
     let (flat, drop, rise) = (cost("flat"), cost("drop"), cost("rise"));
-    // Walking until 3 s keeps the head ~1 m above the crawl's plan in the flat rollout;
-    // the drop's head is near its own plan until then.
-    assert!(drop.z < flat.z, "drop {drop:?} vs flat {flat:?}");
+    // The drop walks with its plan until 3 s; the flat rollout's crawl gets down first
+    // and lags its plan from the start (XY 0.10 against 0.52 m at session 42's 1 s
+    // get-down; the Z errors came within 0.002 m of each other once the get-down took
+    // 1 s instead of 1.5, so the two are told apart by how far behind the head is).
+    assert!(drop.xy < 0.5 * flat.xy, "drop {drop:?} vs flat {flat:?}");
     // The rise's plan goes up to 1.47 m at 2 s while the crawler is still down.
     assert!(rise.z > flat.z, "rise {rise:?} vs flat {flat:?}");
 }
