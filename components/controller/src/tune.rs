@@ -165,7 +165,7 @@ pub struct TuneSettings {
     /// strips ask for no falls at all: a search there may weigh them up.
     pub fall_cost: Option<f64>,
     /// Fields added to the form's built-in search box, or re-bounding one of its
-    /// fields ([`search_box`]); empty: the box the built-in files were made with.
+    /// fields ([`search_box()`]); empty: the box the built-in files were made with.
     pub search: Vec<SearchField>,
 }
 

@@ -65,7 +65,7 @@ impl std::fmt::Display for SearchField {
     }
 }
 
-/// Tuned fields with their search box (units of the field, see [`FormParams`] and,
+/// Tuned fields with their search box (units of the field, see [`crate::FormParams`] and,
 /// for `residual.*`, [`crate::ResidualGains`], which all forms share).
 const TUNED: [(&str, f64, f64); 20] = [
     ("step_time", 0.25, 0.55),
