@@ -283,6 +283,27 @@ pub(crate) fn head_limit(scene: &Scene, s: &PlannerSettings, x: f64, y: f64, gro
 }
 
 /// Fill terrain, curvature, head height and speed caps for uniformly spaced points.
+/// Largest rise between neighbouring terrain samples within `half` of (x, y) \[m\]:
+/// a stair's riser or a bump shows, a smooth slope's rise per cell stays small.
+fn step_near(scene: &Scene, x: f64, y: f64, half: f64) -> f64 {
+    let t = &scene.terrain;
+    let Some((ci, cj)) = t.cell_of(x, y) else {
+        return 0.0;
+    };
+    let k = (half / t.resolution).ceil() as isize;
+    let (ci, cj) = (ci as isize, cj as isize);
+    let mut step = 0.0f64;
+    for j in cj - k..=cj + k {
+        for i in ci - k..=ci + k {
+            let h = t.sample(i, j);
+            step = step
+                .max((t.sample(i + 1, j) - h).abs())
+                .max((t.sample(i, j + 1) - h).abs());
+        }
+    }
+    step
+}
+
 pub(crate) fn annotate(
     scene: &Scene,
     s: &PlannerSettings,
@@ -355,6 +376,13 @@ pub(crate) fn annotate(
             if p.curvature > 0.0 {
                 v = v.min(s.crawl_turn_rate / p.curvature);
             }
+        }
+        if s.stand_step_speed > 0.0
+            && form != Locomotion::Crawl
+            && p.head_height >= s.crawl_switch_height
+            && step_near(scene, p.x, p.y, s.crawl_half_width) > s.stand_step_height
+        {
+            v = v.min(s.stand_step_speed);
         }
         p.v_cap = v / (1.0 + s.slope_speed_gain * p.slope.tan());
     }

@@ -222,6 +222,18 @@ pub struct PlannerSettings {
     /// Speed reduction on slopes: v_cap = v / (1 + k * tan(slope along path)) \[1\].
     /// Default 1.0.
     pub slope_speed_gain: f64,
+    /// Speed cap where a standing form (walk, run, crouch-walk) crosses stepped
+    /// ground (not in the paper) \[m/s\]: where the terrain within
+    /// `crawl_half_width` of a path point steps by more than `stand_step_height`
+    /// between samples one terrain cell apart (a stair's riser, a gravel bump), the
+    /// point's speed is capped at this. The biped falls less on stairs when slower:
+    /// 0.31 falls per 20 s run at 1 m/s against 0.69 at 2 m/s (RESULTS.md, walk
+    /// stairs sweep). 0 disables. Default 0 (see RESULTS.md, session 43).
+    pub stand_step_speed: f64,
+    /// Rise between neighbouring terrain samples that counts as a step for
+    /// `stand_step_speed` \[m\]: above what a 30 degree smooth slope rises per
+    /// 0.1 m cell (0.058 m). Default 0.08.
+    pub stand_step_height: f64,
     /// Planning grid = every `grid_stride`-th terrain sample (1 = the terrain's own
     /// resolution, 0.1 m by default) \[samples\]. Default 1.
     pub grid_stride: usize,
@@ -315,6 +327,8 @@ impl Default for PlannerSettings {
             cliff_clearance: 0.45,
             slope_baseline: 0.6,
             slope_speed_gain: 1.0,
+            stand_step_speed: 0.0,
+            stand_step_height: 0.08,
             grid_stride: 1,
             alt_landmarks: 0,
             path_spacing: 0.1,
@@ -395,6 +409,8 @@ impl PlannerSettings {
             ("max_step_height", self.max_step_height),
             ("cliff_clearance", self.cliff_clearance),
             ("slope_speed_gain", self.slope_speed_gain),
+            ("stand_step_speed", self.stand_step_speed),
+            ("stand_step_height", self.stand_step_height),
             ("obstacle_margin", self.obstacle_margin),
             ("obstacle_sweep", self.obstacle_sweep),
             ("goal_depth", self.goal_depth),

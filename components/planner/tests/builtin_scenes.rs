@@ -128,3 +128,46 @@ fn every_playground_plan_fits_under_every_ceiling() {
         "{plans} plans"
     );
 }
+
+#[test]
+fn stand_step_speed_caps_a_walk_on_the_stairs_and_nowhere_else() {
+    let scene = builtin("terrain-stairs").unwrap();
+    let start = scene.landmark("start").unwrap().region.center();
+    let text = "walk from the start to the goal";
+    let cap = 1.0;
+    let free = &plan(&scene, text, start, PlannerSettings::default())[0];
+    let capped = &plan(
+        &scene,
+        text,
+        start,
+        PlannerSettings {
+            stand_step_speed: cap,
+            ..Default::default()
+        },
+    )[0];
+    // A riser lies under a point where the ground changes by more than a cell's
+    // worth of a smooth slope between neighbouring path points.
+    let on_riser = |t: &Trajectory, i: usize| {
+        i > 0 && (t.points[i].ground - t.points[i - 1].ground).abs() > 0.08
+    };
+    let risers = (0..capped.points.len())
+        .filter(|&i| on_riser(capped, i))
+        .count();
+    assert!(risers >= 10, "{risers} riser points");
+    for (i, p) in capped.points.iter().enumerate() {
+        if on_riser(capped, i) {
+            assert!(p.v <= cap + 1e-6, "s {}: v {} on a riser", p.s, p.v);
+        }
+    }
+    let top = |t: &Trajectory| t.points.iter().map(|p| p.v).fold(0.0, f64::max);
+    assert!(
+        top(capped) > cap + 0.3,
+        "landings still faster: {}",
+        top(capped)
+    );
+    let free_on_risers = (0..free.points.len())
+        .filter(|&i| on_riser(free, i))
+        .map(|i| free.points[i].v)
+        .fold(0.0, f64::max);
+    assert!(free_on_risers > cap + 0.2, "uncapped: {free_on_risers}");
+}
