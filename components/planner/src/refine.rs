@@ -282,7 +282,6 @@ pub(crate) fn head_limit(scene: &Scene, s: &PlannerSettings, x: f64, y: f64, gro
         .fold(f64::INFINITY, f64::min)
 }
 
-/// Fill terrain, curvature, head height and speed caps for uniformly spaced points.
 /// Largest rise between neighbouring terrain samples within `half` of (x, y) \[m\]:
 /// a stair's riser or a bump shows, a smooth slope's rise per cell stays small.
 fn step_near(scene: &Scene, x: f64, y: f64, half: f64) -> f64 {
@@ -304,6 +303,7 @@ fn step_near(scene: &Scene, x: f64, y: f64, half: f64) -> f64 {
     step
 }
 
+/// Fill terrain, curvature, head height and speed caps for uniformly spaced points.
 pub(crate) fn annotate(
     scene: &Scene,
     s: &PlannerSettings,
