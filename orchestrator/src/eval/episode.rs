@@ -399,7 +399,9 @@ mod tests {
     use super::*;
 
     /// Every fall the run counts gets a site, in the form the instruction asked for,
-    /// on the ground it happened on: rapier's run over a flight of stairs falls.
+    /// on the ground it happened on: rapier's run over a flight of stairs falls at
+    /// full speed (the default `stand_step_speed` slows it to 1 m/s there, and then
+    /// it does not fall).
     #[test]
     fn falls_get_their_sites() {
         let scene = plamo_scenes::builtin("terrain-stairs").expect("built-in scene");
@@ -408,7 +410,10 @@ mod tests {
             instructions: "Run from the start to the goal".into(),
             backend: BackendKind::Rapier,
             seed: 0,
-            planner: PlannerSettings::default(),
+            planner: PlannerSettings {
+                stand_step_speed: 0.0,
+                ..Default::default()
+            },
             controller: Default::default(),
             physics_settings: Default::default(),
             // Long enough for the run to go over the flight and back onto it: 8 s
