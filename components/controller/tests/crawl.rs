@@ -4,7 +4,8 @@
 //! straight path, an arc, the planner's 1 m/s and under a 0.6 m ceiling without
 //! falling, climbs a 0.15 m ledge, follows a 1 m/s arc up a slope, turns back at a
 //! corner on gravel and stairs, gets down from a
-//! walk, and stands up again when the plan rises; bit-identical reruns. MuJoCo also:
+//! walk, and stands up again when the plan rises (a crawl that lags its plan: in the
+//! open, not under a top); bit-identical reruns. MuJoCo also:
 //! gravel and stairs, and crawling off at a right angle to the body after the
 //! get-down. The hand-and-knee crawl that ships beside it (`params/crawl-hands.toml`):
 //! a straight path in every engine, gravel and stairs in MuJoCo.
@@ -14,7 +15,9 @@ use plamo_controller::{
     ModelBasedController, Observation, RisingPath, StraightPath, Waypoint, ceiling_scene,
     control_step, flat_scene, run_path,
 };
-use plamo_physics::{BackendKind, HumanoidPose, PhysicsBackend, PhysicsSettings, create_backend};
+use plamo_physics::{
+    BackendKind, HumanoidPose, HumanoidState, PhysicsBackend, PhysicsSettings, create_backend,
+};
 
 /// The crawl speed of most cases here.
 const SPEED: f64 = 0.5;
@@ -289,7 +292,8 @@ pub fn stands_up_when_the_plan_rises(kind: BackendKind) {
         &path,
         &mut policy,
         9 * 30,
-        |_, t, head, policy| {
+        |_, t, s, policy| {
+            let head = s.head[2];
             if (3.5..4.5).contains(&t) {
                 assert!(head < 0.6, "{kind}: head {head} m at {t} s: not crawling");
                 crawled |= policy.is_crawling();
@@ -302,8 +306,93 @@ pub fn stands_up_when_the_plan_rises(kind: BackendKind) {
     assert!(head > 1.2, "{kind}: head {head} m after getting up");
 }
 
+/// A crawl at the planner's 1 m/s whose plan rises to a walk at `up_at` \[s\] in
+/// `scene`, from standing at the origin, for `duration` \[s\]. `each` sees the time
+/// \[s\], the head's lag behind the plan's point along +X \[m\], the humanoid's state
+/// and the policy.
+fn lagging_crawl(
+    kind: BackendKind,
+    scene: &plamo_scenes::Scene,
+    up_at: f64,
+    duration: f64,
+    mut each: impl FnMut(f64, f64, &HumanoidState, &ModelBasedController),
+) -> ModelBasedController {
+    let path = RisingPath {
+        line: StraightPath {
+            start: [0.0, 0.0],
+            speed: 1.0,
+            head_height: 0.4,
+        },
+        up_at,
+    };
+    let mut physics = create_backend(kind, scene, &PhysicsSettings::default()).unwrap();
+    physics
+        .reset(&HumanoidPose::standing_on(&scene.terrain, 0.0, 0.0, 0.0))
+        .unwrap();
+    let mut policy = ModelBasedController::new(settings()).unwrap();
+    let steps = (duration * 30.0) as usize;
+    drive(
+        physics.as_mut(),
+        scene,
+        &path,
+        &mut policy,
+        steps,
+        |_, t, s, policy| each(t, path.point(scene, t).x - s.head[0], s, policy),
+    );
+    policy
+}
+
+/// A crawl lags its 1 m/s plan; out in the open it stands up when the plan rises
+/// however far behind it is. It kept crawling while the plan ran more than 0.6 m
+/// ahead (the guard for a body still under a top), on walk legs of the random tours,
+/// and fell there.
+pub fn stands_up_in_the_open_however_far_it_lags(kind: BackendKind) {
+    let up_at = 8.0;
+    let mut lag_at_rise = 0.0;
+    let mut stood = None;
+    let policy = lagging_crawl(kind, &flat_scene(20.0), up_at, 14.0, |t, lag, s, policy| {
+        if t <= up_at {
+            lag_at_rise = lag;
+        } else if stood.is_none() && !policy.is_crawling() && s.head[2] > 1.2 {
+            stood = Some(t);
+        }
+    });
+    // Past the old guard by a margin, so this case is the one it held down.
+    assert!(lag_at_rise > 1.0, "{kind}: lag {lag_at_rise} m at the rise");
+    let t = stood.unwrap_or_else(|| panic!("{kind}: still down 6 s after the plan rose"));
+    assert!(
+        t < up_at + 4.0,
+        "{kind}: stood up {} s after the rise",
+        t - up_at
+    );
+    assert!(!policy.is_crawling(), "{kind}: back in the crawl gait");
+}
+
+/// The same lagging crawl under a 0.6 m top (x 2.5-4.5 m) whose plan rises past the
+/// top's end: the crawler stays down while it is under the top, where the lag guard
+/// held it before the headroom let a lagging crawler up.
+pub fn stays_down_under_a_top_while_it_lags(kind: BackendKind) {
+    let up_at = 5.0;
+    let mut under = 0;
+    lagging_crawl(kind, &ceiling_scene(20.0), up_at, 10.0, |t, lag, s, _| {
+        let x = s.root_position[0];
+        if t > up_at && (2.5..4.5).contains(&x) && lag > 0.6 {
+            under += 1;
+            assert!(
+                s.head[2] < 0.6,
+                "{kind}: head {} m under the top at {t} s (x {x} m)",
+                s.head[2]
+            );
+        }
+    });
+    assert!(
+        under > 30,
+        "{kind}: {under} steps under the top behind a risen plan"
+    );
+}
+
 /// Steps `policy` on `physics` along `path` for `steps` control steps at 30 Hz;
-/// before step `c` `each` sees `c`, its time \[s\], the head's height \[m\] and the
+/// before step `c` `each` sees `c`, its time \[s\], the humanoid's state and the
 /// policy.
 fn drive(
     physics: &mut dyn PhysicsBackend,
@@ -311,14 +400,14 @@ fn drive(
     path: &dyn HeadPath,
     policy: &mut ModelBasedController,
     steps: usize,
-    mut each: impl FnMut(usize, f64, f64, &ModelBasedController),
+    mut each: impl FnMut(usize, f64, &HumanoidState, &ModelBasedController),
 ) {
     let mut obs = Observation::new(ModelBasedController::LAYOUT);
     let mut action = Action::zeros(ModelBasedController::LAYOUT.num_joints);
     for c in 0..steps {
         let t = c as f64 / 30.0;
         let state = physics.state().clone();
-        each(c, t, state.head[2], policy);
+        each(c, t, &state, policy);
         control_step(
             physics,
             &state,
@@ -413,7 +502,8 @@ pub fn gets_up_from_a_kneeling_start_into_a_crouch_walk(kind: BackendKind) {
         &path,
         &mut policy,
         8 * 30,
-        |c, t, head, policy| {
+        |c, t, s, policy| {
+            let head = s.head[2];
             // After the first step.
             if c == 1 {
                 assert!(
@@ -728,6 +818,14 @@ macro_rules! crawl_suite {
             #[test]
             fn stands_up_when_the_plan_rises() {
                 super::stands_up_when_the_plan_rises($kind);
+            }
+            #[test]
+            fn stands_up_in_the_open_however_far_it_lags() {
+                super::stands_up_in_the_open_however_far_it_lags($kind);
+            }
+            #[test]
+            fn stays_down_under_a_top_while_it_lags() {
+                super::stays_down_under_a_top_while_it_lags($kind);
             }
             #[test]
             fn stands_up_into_a_crouch_walk() {

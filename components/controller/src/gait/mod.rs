@@ -31,9 +31,17 @@ use biped::BipedGait;
 use crawl::CrawlGait;
 
 /// How far a crawler may lag behind its plan and still stand up when the plan rises
-/// \[m\]: a plan that ran ahead of a slow crawl may rise past a low ceiling the body
-/// is still under (replans bring the plan back to the body).
+/// \[m\], unless the way up is clear ([`STAND_HEADROOM`]): a plan that ran ahead of a
+/// slow crawl may rise past a low ceiling the body is still under.
 const MAX_STAND_LAG: f64 = 0.6;
+
+/// Free height above the plan's requested head height (the planner's `head_margin`)
+/// that lets a crawler stand up however far its plan has run ahead \[m\]. The lag guard
+/// ([`MAX_STAND_LAG`]) is for a body still under a low top; with no top within
+/// [`crate::observation::HEADROOM_REACH`] of the root, a crawler that lagged kept
+/// crawling on the open ground of a walk leg until a replan brought the plan back, and
+/// fell there (MuJoCo random tours, seeds 0-999: 7 of the 71 tours lost to a fall).
+const STAND_HEADROOM: f64 = 0.1;
 
 /// Distance from the head to the plan's first waypoint beyond what the plan's own
 /// speed puts there \[m\].
@@ -265,7 +273,7 @@ impl Policy for ModelBasedController {
                     self.crawl.begin_down(obs);
                 }
             } else if self.crawl.settled()
-                && plan_lead(obs) < MAX_STAND_LAG
+                && (plan_lead(obs) < MAX_STAND_LAG || obs.headroom > requested + STAND_HEADROOM)
                 && (requested > above || self.crouch_ahead(obs))
             {
                 self.crawl.begin_up(obs);
