@@ -14,6 +14,7 @@ use plamo_planner::{
 };
 use plamo_scenes::{ObstacleShape, Scene};
 
+use super::body_state::{BodyState, HeadTrack};
 use super::fall_posture::{FallPose, FallPosture};
 use super::ground::{GroundKind, ground_kind};
 use crate::lockstep::{InProcess, Links, Lockstep, RunError, StepStatus};
@@ -97,7 +98,8 @@ pub struct Episode {
 
 /// Where a fall happened: the form the instruction asked for, the ground under
 /// the root, the body's posture when the fall rule first judged the humanoid
-/// fallen, and when in its instruction that was.
+/// fallen, what the body was doing in the seconds before, and when in its
+/// instruction that was.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FallSite {
     /// The instruction's locomotion.
@@ -106,6 +108,8 @@ pub struct FallSite {
     pub ground: GroundKind,
     /// How the body lay.
     pub posture: FallPosture,
+    /// What the body was doing before (the plan's form may be another).
+    pub body: BodyState,
     /// The instruction it fell in (0 = the first).
     pub leg: usize,
     /// How long that instruction had been running \[s\]: a fall in a leg's first
@@ -163,6 +167,12 @@ impl Episode {
     /// [`Episode::fall_sites_field`]), a CSV-safe field.
     pub fn fall_postures_field(&self) -> String {
         self.join_falls(|s| s.posture.name().to_string())
+    }
+
+    /// What the bodies were doing before the falls, as `state;...` (in the order of
+    /// [`Episode::fall_sites_field`]), a CSV-safe field.
+    pub fn fall_bodies_field(&self) -> String {
+        self.join_falls(|s| s.body.name().to_string())
     }
 
     /// When in their instructions the falls came, as `n:seconds;...` (n from 1, as
@@ -312,6 +322,7 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
     let mut falls_so_far = 0;
     // The instruction under way and when it began \[s\].
     let mut leg = (0, 0.0);
+    let mut head_track = HeadTrack::default();
     let status = loop {
         // The pose the fall rule judges in this step (the body may be put back in it).
         let a = &ls.world().agents[0];
@@ -320,6 +331,7 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
             orientation: a.root_orientation,
             head: a.head_position,
         };
+        head_track.record(scene, judged.root, judged.head);
         let stepped = ls.step();
         // A site for each fall the run's own count gained (the count is kept per
         // instruction: a fall across an instruction's end counts in both).
@@ -333,9 +345,14 @@ pub fn run_episode(spec: &EpisodeSpec) -> anyhow::Result<Episode> {
                 locomotion: forms.get(i).copied().unwrap_or(Locomotion::Walk),
                 ground: ground_kind(&scene.terrain, judged.root[0], judged.root[1]),
                 posture: FallPosture::of(scene, &judged),
+                // The step just recorded: never empty.
+                body: head_track.state().unwrap_or(BodyState::Upright),
                 leg: i,
                 into_leg: ls.tick().seconds() - leg.1,
             });
+        }
+        if falls > falls_so_far {
+            head_track.clear();
         }
         falls_so_far = falls;
         let status = match stepped {
@@ -428,6 +445,13 @@ mod tests {
             "{:?}",
             ep.fall_sites
         );
+        // A run from standing that never got down: upright before its first fall.
+        assert_eq!(
+            ep.fall_sites[0].body,
+            BodyState::Upright,
+            "{:?}",
+            ep.fall_sites
+        );
         for s in &ep.fall_sites {
             assert_eq!(s.locomotion, Locomotion::Run);
             // One instruction: every fall is in it, timed from the start.
@@ -435,7 +459,11 @@ mod tests {
             assert!(s.into_leg > 0.0 && s.into_leg <= 16.0, "{s:?}");
         }
         // One entry per fall in every per-fall field.
-        for field in [ep.fall_postures_field(), ep.fall_legs_field()] {
+        for field in [
+            ep.fall_postures_field(),
+            ep.fall_bodies_field(),
+            ep.fall_legs_field(),
+        ] {
             assert_eq!(field.split(';').count(), ep.falls as usize, "{field}");
         }
         assert!(

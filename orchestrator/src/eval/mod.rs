@@ -9,6 +9,7 @@
 //! `j % n + 1`); [`merge`] puts the shards' rows back in job order and writes the
 //! same files, byte for byte, as the unsharded run.
 
+pub mod body_state;
 pub mod compare;
 pub mod dynamic;
 pub mod episode;

@@ -15,6 +15,7 @@ use plamo_scenes::Scene;
 use plotters::style::RGBColor;
 use serde::{Deserialize, Serialize};
 
+use super::body_state::{BodyState, DOWN_BELOW, EARLIER, LATER, RISEN_WITHIN};
 use super::episode::{EpisodeSpec, TIME_LIMIT_EXTRA, TIME_LIMIT_FACTOR, run_episode, verb};
 use super::fall_posture::{FallPosture, PELVIS_UP, ROLLED_FROM, STEP_UNDER_HEAD};
 use super::ground::GroundKind;
@@ -242,56 +243,111 @@ fn row_forms<'a>(seen: impl IntoIterator<Item = &'a str>) -> Vec<String> {
     forms
 }
 
-/// Falls by form and the body's posture at the fall (`eval::fall_posture`), from
-/// `fall_sites` and `fall_postures`; empty for a folder written before the postures
-/// were recorded.
-fn posture_table(runs: &Table) -> anyhow::Result<String> {
-    if !runs.header.iter().any(|h| h == "fall_postures") {
-        return Ok(String::new());
+/// Falls by form (rows, from `fall_sites`) and by a per-fall name in column `col`
+/// (one for each fall, in the order of `fall_sites`), one column per value of `all`:
+/// falls, and \[tours whose first fall it was\]. `None` for a folder written before
+/// `col` was recorded; `what` names a value in errors ("fall posture").
+fn by_form_table<K: Copy + Ord>(
+    runs: &Table,
+    col: &str,
+    what: &str,
+    all: &[K],
+    name: fn(K) -> &'static str,
+) -> anyhow::Result<Option<String>> {
+    if !runs.header.iter().any(|h| h == col) {
+        return Ok(None);
     }
-    // Per form and posture: falls, and tours whose first fall was that.
-    let mut counts = BTreeMap::<(String, FallPosture), (usize, usize)>::new();
+    // Per form and value: falls, and tours whose first fall was that.
+    let mut counts = BTreeMap::<(String, K), (usize, usize)>::new();
     for r in 0..runs.rows.len() {
         let sites = fall_list(runs, r, "fall_sites")?;
-        let postures = fall_list(runs, r, "fall_postures")?;
-        if sites.len() != postures.len() {
+        let values = fall_list(runs, r, col)?;
+        if sites.len() != values.len() {
             bail!(
-                "row {r}: {} fall sites but {} fall postures",
+                "row {r}: {} fall sites but {} {what}s",
                 sites.len(),
-                postures.len()
+                values.len()
             );
         }
-        for (k, (site, posture)) in sites.iter().zip(&postures).enumerate() {
+        for (k, (site, value)) in sites.iter().zip(&values).enumerate() {
             let form = site.split_once('@').map_or(*site, |(f, _)| f);
-            let posture = FallPosture::from_name(posture).ok_or_else(|| {
-                let known = FallPosture::ALL.map(FallPosture::name);
-                anyhow::anyhow!("row {r}: unknown fall posture `{posture}` (one of {known:?})")
-            })?;
-            let e = counts.entry((form.to_string(), posture)).or_default();
+            let value = all
+                .iter()
+                .copied()
+                .find(|v| name(*v) == *value)
+                .ok_or_else(|| {
+                    let known: Vec<&str> = all.iter().map(|v| name(*v)).collect();
+                    anyhow::anyhow!("row {r}: unknown {what} `{value}` (one of {known:?})")
+                })?;
+            let e = counts.entry((form.to_string(), value)).or_default();
             e.0 += 1;
             e.1 += usize::from(k == 0);
         }
     }
-    let mut md = format!(
+    let mut md = String::new();
+    table_head(&mut md, all.iter().map(|v| name(*v)));
+    for f in row_forms(counts.keys().map(|(f, _)| f.as_str())) {
+        md.push_str(&format!("| {f} |"));
+        for v in all {
+            let (n, first) = counts.get(&(f.clone(), *v)).copied().unwrap_or_default();
+            md.push_str(&format!(" {n} [{first}] |"));
+        }
+        md.push('\n');
+    }
+    // What follows starts its own paragraph.
+    md.pop();
+    Ok(Some(md))
+}
+
+/// Falls by form and the body's posture at the fall (`eval::fall_posture`), from
+/// `fall_sites` and `fall_postures`; empty for a folder written before the postures
+/// were recorded.
+fn posture_table(runs: &Table) -> anyhow::Result<String> {
+    let Some(table) = by_form_table(
+        runs,
+        "fall_postures",
+        "fall posture",
+        &FallPosture::ALL,
+        FallPosture::name,
+    )?
+    else {
+        return Ok(String::new());
+    };
+    Ok(format!(
         "\nHow the body lay when the fall rule judged it fallen: falls, and [tours whose first \
          fall it was]; rolled: pelvis roll past {ROLLED_FROM} rad; head-over-step: pelvis \
          still up ({PELVIS_UP} m or more) and the ground under the head {STEP_UNDER_HEAD} m or \
          more above the ground under the pelvis (a body still up is judged from its lowest \
          point, so such a head came within the rule's bar of it too); forward / backward: \
-         the head ahead of / behind the pelvis (`eval::fall_posture`).\n\n",
-    );
-    table_head(&mut md, FallPosture::ALL.iter().map(|p| p.name()));
-    for f in row_forms(counts.keys().map(|(f, _)| f.as_str())) {
-        md.push_str(&format!("| {f} |"));
-        for p in FallPosture::ALL {
-            let (n, first) = counts.get(&(f.clone(), p)).copied().unwrap_or_default();
-            md.push_str(&format!(" {n} [{first}] |"));
-        }
-        md.push('\n');
-    }
-    // The replay note that follows starts its own paragraph.
-    md.pop();
-    Ok(md)
+         the head ahead of / behind the pelvis (`eval::fall_posture`).\n\n{table}"
+    ))
+}
+
+/// Falls by the plan's form and what the body was doing before (`eval::body_state`),
+/// from `fall_sites` and `fall_bodies`; empty for a folder written before the column
+/// was recorded.
+fn body_table(runs: &Table) -> anyhow::Result<String> {
+    let Some(table) = by_form_table(
+        runs,
+        "fall_bodies",
+        "body state",
+        &BodyState::ALL,
+        BodyState::name,
+    )?
+    else {
+        return Ok(String::new());
+    };
+    Ok(format!(
+        "\n\nWhat the body was doing before it fell, read from the head's and pelvis's heights over the \
+         ground {EARLIER} s before the fall and over the last {LATER} s (down: the head \
+         below {DOWN_BELOW} m or the pelvis below {PELVIS_UP} m; up in the last {LATER} s if \
+         not down at some time in them): falls, and [tours whose first fall it was]; the row is the plan's form, which \
+         a body that lags its plan may not be in. down: down at both reads (crawling, \
+         kneeling); rising: down, then up (getting up); risen: up at both, but down within \
+         {RISEN_WITHIN} s before (the first steps after a get-up); lowering: up, then down \
+         (getting down, or sagging slowly); upright: up all through \
+         (`eval::body_state`).\n\n{table}"
+    ))
 }
 
 /// How far into its leg a first fall counts as one of the leg's start \[s\]: a
@@ -363,7 +419,7 @@ fn leg_start_table(runs: &Table) -> anyhow::Result<String> {
     Ok(md)
 }
 
-const COLUMNS: [&str; 23] = [
+const COLUMNS: [&str; 24] = [
     "job",
     "scene_seed",
     "instructions",
@@ -384,6 +440,7 @@ const COLUMNS: [&str; 23] = [
     "replans",
     "fall_sites",
     "fall_postures",
+    "fall_bodies",
     "fall_legs",
     "digest",
     "error",
@@ -464,6 +521,7 @@ impl Experiment for RandomScenes {
             ep.replans.to_string(),
             ep.fall_sites_field(),
             ep.fall_postures_field(),
+            ep.fall_bodies_field(),
             ep.fall_legs_field(),
             format!("{:016x}", ep.digest),
             field(
@@ -542,7 +600,7 @@ impl Experiment for RandomScenes {
              Causes are assigned in this order: planning (no route at the start, or the \
              planner flagged the rest infeasible), error (a component failed), fall, collision \
              (a wall, ceiling or moving obstacle touched and the tour unfinished), timeout.\n\n\
-             ![outcomes](random.png)\n\n{}{}{}{}",
+             ![outcomes](random.png)\n\n{}{}{}{}{}",
             mean(&plen),
             mean(&ptime),
             mean(&reached),
@@ -550,6 +608,7 @@ impl Experiment for RandomScenes {
             mean(&z),
             fall_table(runs)?,
             posture_table(runs)?,
+            body_table(runs)?,
             leg_start_table(runs)?,
             replay_note(runs, meta, out)?,
         ));
@@ -728,6 +787,54 @@ mod tests {
             rows: vec![vec!["0".into(), "crawl@flat".into()]],
         };
         assert_eq!(posture_table(&old).unwrap(), "");
+    }
+
+    #[test]
+    fn the_body_table_counts_falls_by_the_plans_form_and_names_a_bad_state() {
+        let table = |bodies: [&str; 2]| Table {
+            header: ["job", "fall_sites", "fall_bodies"]
+                .map(String::from)
+                .to_vec(),
+            rows: ["walk@flat;walk@slope;crawl@rough", "walk@stairs"]
+                .iter()
+                .zip(bodies)
+                .enumerate()
+                .map(|(k, (s, b))| vec![k.to_string(), s.to_string(), b.to_string()])
+                .collect(),
+        };
+        let md = body_table(&table(["down;rising;down", "down"])).unwrap();
+        let at = |form: &str, b: BodyState| {
+            let col = BodyState::ALL.iter().position(|q| *q == b).unwrap() + 2;
+            md.lines()
+                .find(|l| l.starts_with(&format!("| {form} |")))
+                .unwrap_or_else(|| panic!("no row {form} in {md}"))
+                .split('|')
+                .nth(col)
+                .unwrap()
+                .trim()
+                .to_string()
+        };
+        // A walk leg whose body was still down: two tours, both first falls.
+        assert_eq!(at("walk", BodyState::Down), "2 [2]", "{md}");
+        assert_eq!(at("walk", BodyState::Rising), "1 [0]", "{md}");
+        assert_eq!(at("crawl", BodyState::Down), "1 [0]", "{md}");
+        assert_eq!(at("run", BodyState::Upright), "0 [0]", "{md}");
+        let e = body_table(&table(["down;up;down", "down"]))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("unknown body state `up`") && e.contains("risen"),
+            "{e}"
+        );
+        let e = body_table(&table(["down", "down"]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("3 fall sites but 1 body states"), "{e}");
+        let old = Table {
+            header: vec!["job".into(), "fall_sites".into()],
+            rows: vec![vec!["0".into(), "crawl@flat".into()]],
+        };
+        assert_eq!(body_table(&old).unwrap(), "");
     }
 
     #[test]
