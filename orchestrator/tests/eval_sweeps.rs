@@ -416,6 +416,29 @@ fn compare_pairs_two_random_sweeps_tour_by_tour() {
     assert!(md.contains("Gained 0 ") && md.contains("lost 1,"), "{md}");
     assert!(md.contains("p = 1.000"), "{md}");
 
+    // A tour lost to a fall while the body was getting up on a walk leg: counted by
+    // the plan's form and the body's state.
+    let fell = tmp("cmp-fell");
+    with_cause(&base, &fell, 1, "fall");
+    let mut runs = read_runs(&fell);
+    let (sites, bodies) = (
+        runs.col("fall_sites").unwrap(),
+        runs.col("fall_bodies").unwrap(),
+    );
+    runs.rows[1][sites] = "walk@flat;run@slope".into();
+    runs.rows[1][bodies] = "rising;upright".into();
+    std::fs::write(fell.join("runs.csv"), runs.to_csv()).unwrap();
+    let md = eval::compare::compare(&base, &fell, None).unwrap();
+    let after = md
+        .split("what the body was doing before the first fall")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no body-state table in\n{md}"));
+    let walk = after.lines().find(|l| l.starts_with("| walk |")).unwrap();
+    assert_eq!(
+        walk, "| walk | 0 -> 0 | 0 -> 1 | 0 -> 0 | 0 -> 0 | 0 -> 0 |",
+        "{md}"
+    );
+
     // The command line writes compare.md.
     let out = tmp("cmp-out");
     let o = Command::new(env!("CARGO_BIN_EXE_plamo"))

@@ -13,6 +13,7 @@ use std::path::Path;
 
 use anyhow::{Context, bail};
 
+use super::body_state::BodyState;
 use super::random::{CAUSES, FORMS, RandomScenes, table_head};
 use super::table::Table;
 use super::{Experiment, Meta, read_meta, wilson};
@@ -134,6 +135,27 @@ impl Sweep {
             .split(';')
             .find(|s| !s.is_empty())
             .map(str::to_owned))
+    }
+
+    /// The plan's form and what the body was doing before the first fall of row `r`
+    /// ("walk:rising"), if it failed by a fall; `None` also for a sweep written before
+    /// `fall_bodies` was recorded.
+    fn first_body(&self, r: usize) -> anyhow::Result<Option<String>> {
+        if !self.has_bodies() {
+            return Ok(None);
+        }
+        let (Some(site), Some(body)) = (
+            self.first_fall(r)?,
+            self.runs.str(r, "fall_bodies")?.split(';').next(),
+        ) else {
+            return Ok(None);
+        };
+        let form = site.split_once('@').map_or(site.as_str(), |(f, _)| f);
+        Ok(Some(format!("{form}:{body}")))
+    }
+
+    fn has_bodies(&self) -> bool {
+        self.runs.header.iter().any(|h| h == "fall_bodies")
     }
 }
 
@@ -317,18 +339,17 @@ pub fn compare(base: &Path, new: &Path, out: Option<&Path>) -> anyhow::Result<St
         md,
         "\nTours lost to a fall, by where the first fall came (form, ground), base -> new:\n"
     );
-    table_head(&mut md, GroundKind::ALL.iter().map(|g| g.name()));
-    for f in FORMS {
-        let _ = write!(md, "| {f} |");
-        for g in GroundKind::ALL {
-            let k = format!("{f}@{}", g.name());
-            let (x, y) = (
-                fb.get(&k).copied().unwrap_or(0),
-                fnew.get(&k).copied().unwrap_or(0),
-            );
-            let _ = write!(md, " {x} -> {y} |");
-        }
-        md.push('\n');
+    let grounds = GroundKind::ALL.map(GroundKind::name);
+    base_to_new(&mut md, &grounds, '@', &fb, &fnew);
+    if b.has_bodies() && n.has_bodies() {
+        let body = |s: &Sweep, r: usize| s.first_body(r);
+        let (bb, bn) = (tally(&b, &common, body)?, tally(&n, &common, body)?);
+        let _ = writeln!(
+            md,
+            "\nTours lost to a fall, by what the body was doing before the first fall \
+             (`eval::body_state`; the row is the plan's form), base -> new:\n"
+        );
+        base_to_new(&mut md, &BodyState::ALL.map(BodyState::name), ':', &bb, &bn);
     }
     if let Some(out) = out {
         std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
@@ -336,6 +357,30 @@ pub fn compare(base: &Path, new: &Path, out: Option<&Path>) -> anyhow::Result<St
         std::fs::write(&p, &md).with_context(|| format!("writing {}", p.display()))?;
     }
     Ok(md)
+}
+
+/// A table of tallies keyed `form{sep}column` (rows [`FORMS`], a column per name in
+/// `columns`), each cell `base -> new`.
+fn base_to_new(
+    md: &mut String,
+    columns: &[&str],
+    sep: char,
+    base: &BTreeMap<String, usize>,
+    new: &BTreeMap<String, usize>,
+) {
+    table_head(md, columns.iter().copied());
+    for f in FORMS {
+        let _ = write!(md, "| {f} |");
+        for c in columns {
+            let k = format!("{f}{sep}{c}");
+            let (x, y) = (
+                base.get(&k).copied().unwrap_or(0),
+                new.get(&k).copied().unwrap_or(0),
+            );
+            let _ = write!(md, " {x} -> {y} |");
+        }
+        md.push('\n');
+    }
 }
 
 #[cfg(test)]
