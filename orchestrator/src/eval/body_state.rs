@@ -165,6 +165,11 @@ mod tests {
         t
     }
 
+    /// A crouch-walk's 0.85 m head dropping at `rate` \[m/s\] from `start` \[s\].
+    fn crouch_dropping(start: f64, rate: f64) -> impl Fn(f64) -> f64 {
+        move |t: f64| 0.85 - rate * (t - start).max(0.0)
+    }
+
     /// A get-up from a crawl's 0.4 m to a walk's 1.47 m over 2 s starting at `start`.
     fn get_up(start: f64) -> impl Fn(f64) -> f64 {
         move |t: f64| 0.4 + 1.07 * ((t - start) / 2.0).clamp(0.0, 1.0)
@@ -185,22 +190,10 @@ mod tests {
         assert_eq!(track(5.0, down).state(), Some(BodyState::Lowering));
         // A crouch-walk (head 0.85 m) going over in its last 0.3 s: upright, not
         // getting down, though its head passed below DOWN_BELOW before the fall.
-        let over = |t: f64| {
-            if t < 4.7 {
-                0.85
-            } else {
-                0.85 - 2.0 * (t - 4.7)
-            }
-        };
+        let over = crouch_dropping(4.7, 2.0);
         assert_eq!(track(5.0, over).state(), Some(BodyState::Upright));
         // The same body sagging from 1.5 s before: getting down.
-        let sag = |t: f64| {
-            if t < 3.5 {
-                0.85
-            } else {
-                0.85 - 0.5 * (t - 3.5)
-            }
-        };
+        let sag = crouch_dropping(3.5, 0.5);
         assert_eq!(track(5.0, sag).state(), Some(BodyState::Lowering));
         // A crawler rolled onto its back lifts its head above DOWN_BELOW for a moment
         // with its pelvis on the ground: still down.

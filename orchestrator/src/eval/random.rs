@@ -245,17 +245,19 @@ fn row_forms<'a>(seen: impl IntoIterator<Item = &'a str>) -> Vec<String> {
 
 /// Falls by form (rows, from `fall_sites`) and by a per-fall name in column `col`
 /// (one for each fall, in the order of `fall_sites`), one column per value of `all`:
-/// falls, and \[tours whose first fall it was\]. `None` for a folder written before
-/// `col` was recorded; `what` names a value in errors ("fall posture").
+/// falls, and \[tours whose first fall it was\], after the paragraph `intro`. Empty
+/// for a folder written before `col` was recorded; `what` names a value in errors
+/// ("fall posture").
 fn by_form_table<K: Copy + Ord>(
     runs: &Table,
     col: &str,
     what: &str,
     all: &[K],
     name: fn(K) -> &'static str,
-) -> anyhow::Result<Option<String>> {
+    intro: &str,
+) -> anyhow::Result<String> {
     if !runs.header.iter().any(|h| h == col) {
-        return Ok(None);
+        return Ok(String::new());
     }
     // Per form and value: falls, and tours whose first fall was that.
     let mut counts = BTreeMap::<(String, K), (usize, usize)>::new();
@@ -284,7 +286,7 @@ fn by_form_table<K: Copy + Ord>(
             e.1 += usize::from(k == 0);
         }
     }
-    let mut md = String::new();
+    let mut md = format!("{intro}\n\n");
     table_head(&mut md, all.iter().map(|v| name(*v)));
     for f in row_forms(counts.keys().map(|(f, _)| f.as_str())) {
         md.push_str(&format!("| {f} |"));
@@ -296,58 +298,42 @@ fn by_form_table<K: Copy + Ord>(
     }
     // What follows starts its own paragraph.
     md.pop();
-    Ok(Some(md))
+    Ok(md)
 }
 
 /// Falls by form and the body's posture at the fall (`eval::fall_posture`), from
 /// `fall_sites` and `fall_postures`; empty for a folder written before the postures
 /// were recorded.
 fn posture_table(runs: &Table) -> anyhow::Result<String> {
-    let Some(table) = by_form_table(
-        runs,
-        "fall_postures",
-        "fall posture",
-        &FallPosture::ALL,
-        FallPosture::name,
-    )?
-    else {
-        return Ok(String::new());
-    };
-    Ok(format!(
+    let intro = format!(
         "\nHow the body lay when the fall rule judged it fallen: falls, and [tours whose first \
          fall it was]; rolled: pelvis roll past {ROLLED_FROM} rad; head-over-step: pelvis \
          still up ({PELVIS_UP} m or more) and the ground under the head {STEP_UNDER_HEAD} m or \
          more above the ground under the pelvis (a body still up is judged from its lowest \
          point, so such a head came within the rule's bar of it too); forward / backward: \
-         the head ahead of / behind the pelvis (`eval::fall_posture`).\n\n{table}"
-    ))
+         the head ahead of / behind the pelvis (`eval::fall_posture`)."
+    );
+    let (all, name) = (&FallPosture::ALL, FallPosture::name);
+    by_form_table(runs, "fall_postures", "fall posture", all, name, &intro)
 }
 
 /// Falls by the plan's form and what the body was doing before (`eval::body_state`),
 /// from `fall_sites` and `fall_bodies`; empty for a folder written before the column
 /// was recorded.
 fn body_table(runs: &Table) -> anyhow::Result<String> {
-    let Some(table) = by_form_table(
-        runs,
-        "fall_bodies",
-        "body state",
-        &BodyState::ALL,
-        BodyState::name,
-    )?
-    else {
-        return Ok(String::new());
-    };
-    Ok(format!(
-        "\n\nWhat the body was doing before it fell, read from the head's and pelvis's heights over the \
-         ground {EARLIER} s before the fall and over the last {LATER} s (down: the head \
-         below {DOWN_BELOW} m or the pelvis below {PELVIS_UP} m; up in the last {LATER} s if \
-         not down at some time in them): falls, and [tours whose first fall it was]; the row is the plan's form, which \
-         a body that lags its plan may not be in. down: down at both reads (crawling, \
-         kneeling); rising: down, then up (getting up); risen: up at both, but down within \
-         {RISEN_WITHIN} s before (the first steps after a get-up); lowering: up, then down \
-         (getting down, or sagging slowly); upright: up all through \
-         (`eval::body_state`).\n\n{table}"
-    ))
+    let intro = format!(
+        "\n\nWhat the body was doing before it fell, read from the head's and pelvis's \
+         heights over the ground {EARLIER} s before the fall and over the last {LATER} s \
+         (down: the head below {DOWN_BELOW} m or the pelvis below {PELVIS_UP} m; up in the \
+         last {LATER} s if not down at some time in them): falls, and [tours whose first \
+         fall it was]; the row is the plan's form, which a body that lags its plan may not \
+         be in. down: down at both reads (crawling, kneeling); rising: down, then up \
+         (getting up); risen: up at both, but down within {RISEN_WITHIN} s before (the \
+         first steps after a get-up); lowering: up, then down (getting down, or sagging \
+         slowly); upright: up all through (`eval::body_state`)."
+    );
+    let (all, name) = (&BodyState::ALL, BodyState::name);
+    by_form_table(runs, "fall_bodies", "body state", all, name, &intro)
 }
 
 /// How far into its leg a first fall counts as one of the leg's start \[s\]: a
@@ -735,23 +721,49 @@ mod tests {
         assert_eq!(cell(&md, "run", GroundKind::Slope), "0 (0) [0]", "{md}");
     }
 
+    /// A runs.csv of one tour per entry of `sites` (`fall_sites`), with the per-fall
+    /// column `col` holding `values`.
+    fn per_fall_runs(col: &str, sites: &[&str], values: &[&str]) -> Table {
+        Table {
+            header: ["job", "fall_sites", col].map(String::from).to_vec(),
+            rows: sites
+                .iter()
+                .zip(values)
+                .enumerate()
+                .map(|(k, (s, v))| vec![k.to_string(), s.to_string(), v.to_string()])
+                .collect(),
+        }
+    }
+
+    /// Value column `col` (0 = the first after the form) of the row for `form` in the
+    /// markdown table `md`.
+    fn column_of_row(md: &str, form: &str, col: usize) -> String {
+        md.lines()
+            .find(|l| l.starts_with(&format!("| {form} |")))
+            .unwrap_or_else(|| panic!("no row {form} in {md}"))
+            .split('|')
+            .nth(col + 2)
+            .unwrap()
+            .trim()
+            .to_string()
+    }
+
+    /// A runs.csv from before the per-fall columns: only `fall_sites`.
+    fn before_per_fall_columns() -> Table {
+        Table {
+            header: vec!["job".into(), "fall_sites".into()],
+            rows: vec![vec!["0".into(), "crawl@flat".into()]],
+        }
+    }
+
     #[test]
     fn the_posture_table_counts_falls_and_first_falls_and_names_a_bad_posture() {
-        let table = |postures: [&str; 3]| Table {
-            header: ["job", "fall_sites", "fall_postures"]
-                .map(String::from)
-                .to_vec(),
-            rows: [
-                "crawl@stairs;walk@flat;crawl@stairs",
-                "crawl@rough;crawl@stairs",
-                "",
-            ]
-            .iter()
-            .zip(postures)
-            .enumerate()
-            .map(|(k, (s, p))| vec![k.to_string(), s.to_string(), p.to_string()])
-            .collect(),
-        };
+        let sites = [
+            "crawl@stairs;walk@flat;crawl@stairs",
+            "crawl@rough;crawl@stairs",
+            "",
+        ];
+        let table = |postures: [&str; 3]| per_fall_runs("fall_postures", &sites, &postures);
         let md = posture_table(&table([
             "head-over-step;backward;rolled",
             "head-over-step;head-over-step",
@@ -759,12 +771,8 @@ mod tests {
         ]))
         .unwrap();
         let at = |form: &str, p: FallPosture| {
-            let col = FallPosture::ALL.iter().position(|q| *q == p).unwrap() + 2;
-            let row = md
-                .lines()
-                .find(|l| l.starts_with(&format!("| {form} |")))
-                .unwrap_or_else(|| panic!("no row {form} in {md}"));
-            row.split('|').nth(col).unwrap().trim().to_string()
+            let col = FallPosture::ALL.iter().position(|q| *q == p).unwrap();
+            column_of_row(&md, form, col)
         };
         assert_eq!(at("crawl", FallPosture::HeadOverStep), "3 [2]", "{md}");
         assert_eq!(at("crawl", FallPosture::Rolled), "1 [0]", "{md}");
@@ -782,37 +790,17 @@ mod tests {
             .to_string();
         assert!(e.contains("3 fall sites but 1 fall postures"), "{e}");
         // A folder from before the column: no table, no error.
-        let old = Table {
-            header: vec!["job".into(), "fall_sites".into()],
-            rows: vec![vec!["0".into(), "crawl@flat".into()]],
-        };
-        assert_eq!(posture_table(&old).unwrap(), "");
+        assert_eq!(posture_table(&before_per_fall_columns()).unwrap(), "");
     }
 
     #[test]
     fn the_body_table_counts_falls_by_the_plans_form_and_names_a_bad_state() {
-        let table = |bodies: [&str; 2]| Table {
-            header: ["job", "fall_sites", "fall_bodies"]
-                .map(String::from)
-                .to_vec(),
-            rows: ["walk@flat;walk@slope;crawl@rough", "walk@stairs"]
-                .iter()
-                .zip(bodies)
-                .enumerate()
-                .map(|(k, (s, b))| vec![k.to_string(), s.to_string(), b.to_string()])
-                .collect(),
-        };
+        let sites = ["walk@flat;walk@slope;crawl@rough", "walk@stairs"];
+        let table = |bodies: [&str; 2]| per_fall_runs("fall_bodies", &sites, &bodies);
         let md = body_table(&table(["down;rising;down", "down"])).unwrap();
         let at = |form: &str, b: BodyState| {
-            let col = BodyState::ALL.iter().position(|q| *q == b).unwrap() + 2;
-            md.lines()
-                .find(|l| l.starts_with(&format!("| {form} |")))
-                .unwrap_or_else(|| panic!("no row {form} in {md}"))
-                .split('|')
-                .nth(col)
-                .unwrap()
-                .trim()
-                .to_string()
+            let col = BodyState::ALL.iter().position(|q| *q == b).unwrap();
+            column_of_row(&md, form, col)
         };
         // A walk leg whose body was still down: two tours, both first falls.
         assert_eq!(at("walk", BodyState::Down), "2 [2]", "{md}");
@@ -830,11 +818,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("3 fall sites but 1 body states"), "{e}");
-        let old = Table {
-            header: vec!["job".into(), "fall_sites".into()],
-            rows: vec![vec!["0".into(), "crawl@flat".into()]],
-        };
-        assert_eq!(body_table(&old).unwrap(), "");
+        assert_eq!(body_table(&before_per_fall_columns()).unwrap(), "");
     }
 
     #[test]
