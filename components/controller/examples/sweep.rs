@@ -275,7 +275,7 @@ fn trace(
     // PLAMO_TRACE_ALL=1: every line, not only those before a fall.
     let all = std::env::var_os("PLAMO_TRACE_ALL").is_some();
     println!(
-        "t, x pelvis, ground, slope, pelvis h, pitch, vx, vz, head h, lag, heading err, foot R (dx, h), foot L (dx, h), knees, contact"
+        "t, x pelvis, ground, slope, pelvis h, pitch, vx, vz, head h, lag, heading err, foot R (dx, h)*, foot L (dx, h)* (* in contact), knees, contact"
     );
     for c in 0..(duration * 30.0) as usize {
         let t = c as f64 / 30.0;
@@ -288,7 +288,9 @@ fn trace(
         let fallen = settings.is_fallen(head_h, path.head_height());
         let foot = |f: usize| {
             let p = s.body_pos[FEET[f]];
-            format!("({:5.2},{:5.2})", p[0] - px, p[2] - g(p[0], p[1]))
+            // `*`: the foot touches the ground.
+            let down = if s.contact[FEET[f]] { "*" } else { " " };
+            format!("({:5.2},{:5.2}){down}", p[0] - px, p[2] - g(p[0], p[1]))
         };
         let knee = |n: &str| s.joint_pos[plamo_physics::humanoid::joint_index(n).unwrap()];
         if c.is_multiple_of(2) || fallen {
