@@ -41,7 +41,7 @@ pub use policy::{Action, Policy, RootWrench};
 pub use rollout::{
     ArcPath, DropPath, HeadPath, RUN_STAGGER, RampedPath, RisingPath, START_ACCEL, STRIP_LENGTH,
     StraightPath, TurnPath, ceiling_scene, control_step, flat_scene, ledge_scene, run_path,
-    run_path_with, run_straight, staggered_start,
+    run_path_with, run_straight, staggered_start, top_scene,
 };
 pub use settings::{ControllerSettings, GRAVITY};
 pub use tune::{

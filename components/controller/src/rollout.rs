@@ -381,12 +381,18 @@ pub fn flat_scene(length: f64) -> Scene {
 /// A [`flat_scene`] with a 0.6 m ceiling (the playground's tunnel height) over x in
 /// \[2.5, 4.5\] m, 2 m wide: the bench for crawling under a low top.
 pub fn ceiling_scene(length: f64) -> Scene {
+    top_scene(length, 0.6)
+}
+
+/// A [`flat_scene`] with a top `clearance` \[m\] over the ground, 0.2 m thick, over x
+/// in \[2.5, 4.5\] m, 2 m wide.
+pub fn top_scene(length: f64, clearance: f64) -> Scene {
     let mut scene = flat_scene(length);
     scene.tops.push(plamo_scenes::TopObstacle {
         name: "tunnel".into(),
         footprint: plamo_scenes::Footprint::axis_aligned([3.5, 0.0], [1.0, 1.0]),
-        z_bottom: 0.6,
-        z_top: 0.8,
+        z_bottom: clearance,
+        z_top: clearance + 0.2,
     });
     scene
 }

@@ -93,6 +93,8 @@ pub const SHINS: [usize; 2] = [10, 13];
 /// Head reference point in the head body's frame \[m\]: the centre of the head sphere.
 /// `HumanoidState::head` is this point in world coordinates.
 pub const HEAD_OFFSET: [f64; 3] = [0.0, 0.0, 0.08];
+/// Radius of the head sphere around [`HEAD_OFFSET`] \[m\].
+pub const HEAD_RADIUS: f64 = 0.10;
 /// Pelvis origin height above flat ground when standing in the rest pose \[m\].
 pub const STANDING_PELVIS_HEIGHT: f64 = 0.93;
 /// Head centre height above flat ground when standing in the rest pose \[m\].
@@ -309,7 +311,7 @@ pub const BODIES: [BodyDesc; NUM_BODIES] = [
         &[3, 4, 5],
         &[Shape::Sphere {
             center: HEAD_OFFSET,
-            radius: 0.10,
+            radius: HEAD_RADIUS,
         }],
     ),
     body(

@@ -65,7 +65,8 @@ pub use component::{PhysicsComponent, Placement, reset_request};
 pub use error::{ParseBackendKindError, PhysicsError};
 pub use fall::{FallReason, Posture, detect_fall};
 pub use humanoid::{
-    BODY_NAMES, FEET, HANDS, HEAD, HEAD_OFFSET, JOINT_NAMES, NUM_BODIES, NUM_JOINTS, PELVIS,
+    BODY_NAMES, FEET, HANDS, HEAD, HEAD_OFFSET, HEAD_RADIUS, JOINT_NAMES, NUM_BODIES, NUM_JOINTS,
+    PELVIS,
 };
 #[cfg(feature = "mujoco")]
 pub use mujoco::{MujocoBackend, humanoid_mjcf};
