@@ -389,6 +389,18 @@ pub struct CrawlParams {
     /// `sit_back_speed`. 0: off.
     #[serde(default)]
     pub up_com_gain: f64,
+    /// How far the centre of mass may run ahead of the ankles (heading frame) while
+    /// the get-up straightens the legs before the biped takes over to step under it
+    /// \[m\] (once the pelvis is `up_handoff_height` up). Out of a squat with the centre
+    /// of mass beyond the toes (a crawl facing up a flight of stairs), the
+    /// straightening legs pushed it 0.45-0.8 m ahead and the body fell onto its face
+    /// (RESULTS "Random 4-landmark scenes", session 47). 4: never.
+    #[serde(default = "never")]
+    pub up_handoff_ahead: f64,
+    /// Lowest pelvis height at which a get-up hands over to the biped as
+    /// `up_handoff_ahead` says \[m\] (below it the legs are too bent to step).
+    #[serde(default)]
+    pub up_handoff_height: f64,
     /// How far the centre of mass may be behind the ankles (heading frame) while
     /// getting down before the residual pushes it forward (`down_com_gain`) \[m\]. On
     /// flat ground the squat holds it within 0.06 m; on a hillside falling away
@@ -567,7 +579,7 @@ impl CrawlParams {
                 ),
             );
         }
-        let ranges: [(&'static str, f64, f64, f64); 79] = [
+        let ranges: [(&'static str, f64, f64, f64); 81] = [
             ("top_pitch", self.top_pitch, -0.5, 1.5),
             ("top_below", self.top_below, 0.0, 3.0),
             ("turn_slowdown", self.turn_slowdown, 0.0, 10.0),
@@ -577,6 +589,8 @@ impl CrawlParams {
             ("up_com_gain", self.up_com_gain, 0.0, 100.0),
             ("down_com_gain", self.down_com_gain, 0.0, 100.0),
             ("up_com_ahead", self.up_com_ahead, 0.0, 0.5),
+            ("up_handoff_ahead", self.up_handoff_ahead, 0.0, 4.0),
+            ("up_handoff_height", self.up_handoff_height, 0.0, 1.0),
             ("down_com_behind", self.down_com_behind, 0.0, 0.5),
             ("pursuit", self.pursuit, 0.0, 3.0),
             ("realign_above", self.realign_above, 0.0, PI),
@@ -1454,8 +1468,13 @@ impl CrawlGait {
                 self.through_squat(true, &self.from, &stand, t / p.up_time, targets);
                 self.level_legs(p.up_level, roll, targets);
                 let (into, out) = self.squat_phase(t / p.up_time);
+                let ahead = com_over_feet(&self.mass_fraction, obs).0[0];
+                // Straightening legs that tip the body forward hand it to the biped,
+                // whose steps can catch it: the get-up is over.
+                let tipping =
+                    !into && ahead > p.up_handoff_ahead && obs.root_height > p.up_handoff_height;
                 self.mode = Mode::Up {
-                    t: t + CONTROL_DT,
+                    t: if tipping { p.up_time } else { t + CONTROL_DT },
                     pitch0,
                     height0,
                 };
@@ -1470,7 +1489,6 @@ impl CrawlGait {
                 // The hands push the body back over the feet while sitting back. The
                 // legs must straighten under the centre of mass: ahead of the ankles,
                 // the straightening legs tipped the whole body onto its face.
-                let ahead = com_over_feet(&self.mass_fraction, obs).0[0];
                 let back = if into { -p.sit_back_speed } else { 0.0 }
                     - p.up_com_gain * (ahead - p.up_com_ahead).max(0.0);
                 ([back, 0.0], pitch0 * (1.0 - s), height, 0.0)
@@ -1904,6 +1922,51 @@ mod tests {
         );
         // Over the ankles: no extra push.
         assert_eq!(push(on, false), push(off, false));
+    }
+
+    #[test]
+    fn a_get_up_tipping_forward_as_the_legs_straighten_hands_over_to_the_biped() {
+        // Control steps of the get-up until it is over, for a body whose centre of mass
+        // is `ahead` \[m\] ahead of its ankles (every body there but the feet) and
+        // whose pelvis is `height` \[m\] up.
+        let steps_to_stand = |ahead: f64, height: f64| {
+            let mut obs = crawling_obs();
+            for (b, p) in obs.body_pos.iter_mut().enumerate() {
+                *p = if FEET.contains(&b) {
+                    [0.0, 0.0, -0.4]
+                } else {
+                    [ahead, 0.0, 0.0]
+                };
+            }
+            obs.root_height = height;
+            let params = CrawlParams::default();
+            let mut gait = crawling_gait(params);
+            gait.begin_up(&obs);
+            let mut out = Action::default();
+            (1..200)
+                .find(|_| {
+                    gait.act(&obs, &mut out);
+                    gait.stood_up()
+                })
+                .unwrap()
+        };
+        let p = CrawlParams::default();
+        let squat = (p.squat_share * p.up_time / CONTROL_DT).ceil() as usize;
+        let whole = (p.up_time / CONTROL_DT).round() as usize;
+        // Far ahead with the pelvis up: over as soon as the legs start to straighten.
+        let tipping = steps_to_stand(0.5, 0.6);
+        assert!(
+            (squat..squat + 3).contains(&tipping),
+            "{tipping} (squat {squat})"
+        );
+        // Over the feet, or with the legs still too bent to step: the whole get-up.
+        for (ahead, height) in [(0.1, 0.6), (0.5, 0.4)] {
+            let n = steps_to_stand(ahead, height);
+            assert!(
+                n + 1 >= whole,
+                "ahead {ahead}, height {height}: {n} of {whole}"
+            );
+        }
     }
 
     /// Knee, hip and ankle pitch targets (right, left) `secs` into the get-up (or,
