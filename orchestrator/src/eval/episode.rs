@@ -416,9 +416,10 @@ mod tests {
     use super::*;
 
     /// Every fall the run counts gets a site, in the form the instruction asked for,
-    /// on the ground it happened on: rapier's run over a flight of stairs falls at
-    /// full speed (the default `stand_step_speed` slows it to 1 m/s there, and then
-    /// it does not fall).
+    /// on the ground it happened on: rapier's run over a flight of stairs at 5 m/s
+    /// falls there (the default `stand_step_speed` slows it to 1 m/s, and then it
+    /// does not fall; since the swing foot lands by arrival, at 4 m/s its only fall
+    /// is on a landing).
     #[test]
     fn falls_get_their_sites() {
         let scene = plamo_scenes::builtin("terrain-stairs").expect("built-in scene");
@@ -429,6 +430,7 @@ mod tests {
             seed: 0,
             planner: PlannerSettings {
                 stand_step_speed: 0.0,
+                run_speed: 5.0,
                 ..Default::default()
             },
             controller: Default::default(),
