@@ -13,7 +13,7 @@ use parry3d::shape::{Ball, Capsule, Cuboid, Shape};
 use plamo_scenes::{ObstacleShape, ObstacleState, Scene};
 use serde::{Deserialize, Serialize};
 
-use crate::{PlannerSettings, Trajectory};
+use crate::{PlannerSettings, Trajectory, Waypoint};
 
 /// A predicted collision between the plan and a dynamic obstacle.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -165,7 +165,9 @@ fn obstacle_shape(shape: ObstacleShape, st: &ObstacleState) -> (Box<dyn Shape>, 
 }
 
 /// The first predicted contact between the plan and any scene obstacle in
-/// \[now, now + horizon\], closer than `obstacle_margin`.
+/// \[now, now + horizon\], closer than `obstacle_margin`; the plan is taken as the
+/// body's, with nothing behind its head ([`predict_conflict_with`] for a lagging
+/// or crawling body).
 pub fn predict_conflict(
     traj: &Trajectory,
     scene: &Scene,
@@ -173,17 +175,27 @@ pub fn predict_conflict(
     now: f64,
     how: Prediction,
 ) -> Option<Conflict> {
-    predict_conflict_with(traj, scene, External::NONE, s, now, how)
+    predict_conflict_with(traj, scene, External::NONE, s, now, 0.0, how)
 }
 
 /// [`predict_conflict`] over the scene's obstacles and then the host's `external`
-/// ones (their conflicts are numbered after the scene's).
+/// ones (their conflicts are numbered after the scene's), for a head `lag` metres of
+/// path behind the plan at `now` ([`Trajectory::lag_at`]).
+///
+/// The character is a vertical capsule from the ground to the head, swept along the
+/// plan and, behind each plan point, along the path as far as the head lags it (at
+/// most `lag_sweep_max`) and as far as a crawling body lies behind its head, one
+/// capsule every character radius. A crawl's body (`crawl_body_length`, head to
+/// feet) is covered where the plan's head is at `crawl_height`, blended to none at
+/// `crouch_height`: the capsule at the head alone missed the crawler's trunk and
+/// legs, which balls crossing behind the head rolled over (random tours, session 48).
 pub fn predict_conflict_with(
     traj: &Trajectory,
     scene: &Scene,
     external: External,
     s: &PlannerSettings,
     now: f64,
+    lag: f64,
     how: Prediction,
 ) -> Option<Conflict> {
     let nd = scene.dynamic.len();
@@ -198,6 +210,24 @@ pub fn predict_conflict_with(
     let dt = s.collision_dt;
     let steps = (s.collision_horizon / dt).ceil() as usize;
     let r = s.character_radius;
+    let lag = lag.clamp(0.0, s.lag_sweep_max);
+    // How far behind a plan point's head its body lies: a crawl's length less the
+    // capsule's radius at `crawl_height`, none from `crouch_height` up.
+    let body_behind = |head: f64| {
+        let span = (s.crouch_height - s.crawl_height).max(1e-9);
+        let lying = ((s.crouch_height - head) / span).clamp(0.0, 1.0);
+        lying * (s.crawl_body_length - r).max(0.0)
+    };
+    // The capsule's centre for a plan sample: on the ground under the head, half
+    // the head's height up.
+    let centre = |w: &Waypoint| {
+        let ground = w.position[2] - w.head_height;
+        [
+            w.position[0],
+            w.position[1],
+            ground + 0.5 * w.head_height.max(2.0 * r),
+        ]
+    };
     let mut best: Option<Conflict> = None;
     for k in 0..nd + external.obstacles.len() {
         for step in 0..steps {
@@ -207,25 +237,6 @@ pub fn predict_conflict_with(
             }
             let a = traj.sample_at(t0);
             let b = traj.sample_at(t0 + dt);
-            let (ga, gb) = (a.position[2] - a.head_height, b.position[2] - b.head_height);
-            // Vertical capsule from the ground to the head.
-            let half = (0.5 * a.head_height - r).max(0.0);
-            let capsule = Capsule::new_z(half as f32, r as f32);
-            let ca = [
-                a.position[0],
-                a.position[1],
-                ga + 0.5 * a.head_height.max(2.0 * r),
-            ];
-            let cb = [
-                b.position[0],
-                b.position[1],
-                gb + 0.5 * b.head_height.max(2.0 * r),
-            ];
-            let vc = [
-                (cb[0] - ca[0]) / dt,
-                (cb[1] - ca[1]) / dt,
-                (cb[2] - ca[2]) / dt,
-            ];
             let oa = state(k, t0);
             let ob = state(k, t0 + dt);
             let vo = [
@@ -240,17 +251,36 @@ pub fn predict_conflict_with(
                 stop_at_penetration: true,
                 compute_impact_geometry_on_penetration: false,
             };
-            let hit = cast_shapes(
-                &Pose::from_translation(v3(ca)),
-                v3(vc),
-                &capsule,
-                &pose_o,
-                v3(vo),
-                shape_o.as_ref(),
-                opts,
-            )
-            .ok()
-            .flatten();
+            // The plan point, then the path behind it every character radius.
+            let behind = lag + body_behind(a.head_height);
+            let n_back = (behind / r).ceil() as usize;
+            let hit = (0..=n_back).find_map(|j| {
+                let back = (j as f64 * r).min(behind);
+                let (pa, pb) = if j == 0 {
+                    (a, b)
+                } else {
+                    (traj.sample_at_s(a.s - back), traj.sample_at_s(b.s - back))
+                };
+                let half = (0.5 * pa.head_height - r).max(0.0);
+                let capsule = Capsule::new_z(half as f32, r as f32);
+                let (ca, cb) = (centre(&pa), centre(&pb));
+                let vc = [
+                    (cb[0] - ca[0]) / dt,
+                    (cb[1] - ca[1]) / dt,
+                    (cb[2] - ca[2]) / dt,
+                ];
+                cast_shapes(
+                    &Pose::from_translation(v3(ca)),
+                    v3(vc),
+                    &capsule,
+                    &pose_o,
+                    v3(vo),
+                    shape_o.as_ref(),
+                    opts,
+                )
+                .ok()
+                .flatten()
+            });
             if let Some(h) = hit {
                 let t = t0 + h.time_of_impact as f64;
                 let o = state(k, t);

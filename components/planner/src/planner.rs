@@ -736,7 +736,8 @@ impl Planner {
                 pts[k].v = b.max(0.0).sqrt().min(pts[k].v_cap);
             }
             let tr = Trajectory::new(now, pts);
-            let again = predict_conflict_with(&tr, &self.scene, self.external(), &s, now, how);
+            // The detour starts from the head: no lag.
+            let again = predict_conflict_with(&tr, &self.scene, self.external(), &s, now, 0.0, how);
             best = Some(tr);
             match again {
                 Some(c) => conflict = c,
@@ -854,8 +855,15 @@ impl Planner {
         };
         if self.settings.dynamic_replanning
             && let Some(tr) = self.current.clone()
-            && let Some(conflict) =
-                predict_conflict_with(&tr, &self.scene, self.external(), &self.settings, now, how)
+            && let Some(conflict) = predict_conflict_with(
+                &tr,
+                &self.scene,
+                self.external(),
+                &self.settings,
+                now,
+                tr.lag_at(now, hx, hy),
+                how,
+            )
         {
             match self.replan_around(&tr, conflict, [hx, hy], now, how) {
                 Ok(new) => {

@@ -259,6 +259,12 @@ pub struct PlannerSettings {
     pub collision_dt: f64,
     /// Extra distance kept from dynamic obstacles \[m\]. Default 0.2.
     pub obstacle_margin: f64,
+    /// Dynamic obstacles: the collision sweep also covers the path behind the plan
+    /// point as far as the head lags it, at most this far \[m\] (not in the paper):
+    /// a crawl lags its plan by 0.3-2.4 m, and the sweep of the plan alone predicted
+    /// the obstacle's crossing where the body was not yet. 0 = the plan point only.
+    /// Default 2.0 (`lag_distance`: beyond it the plan is made again from the head).
+    pub lag_sweep_max: f64,
     /// Local re-plan: the obstacle is blocked where it is predicted at the conflict and
     /// along where it goes for this long after it \[s\], so that the detour passes
     /// behind a crossing obstacle rather than into its way. Not in the paper (it sets
@@ -340,6 +346,7 @@ impl Default for PlannerSettings {
             collision_horizon: 1.5,
             collision_dt: 0.1,
             obstacle_margin: 0.2,
+            lag_sweep_max: 2.0,
             obstacle_sweep: 3.0,
             rejoin_distance: 2.0,
             replan_window_margin: 3.0,
@@ -414,6 +421,7 @@ impl PlannerSettings {
             ("stand_step_speed", self.stand_step_speed),
             ("stand_step_height", self.stand_step_height),
             ("obstacle_margin", self.obstacle_margin),
+            ("lag_sweep_max", self.lag_sweep_max),
             ("obstacle_sweep", self.obstacle_sweep),
             ("goal_depth", self.goal_depth),
         ];

@@ -142,6 +142,50 @@ impl Trajectory {
         (dx.hypot(dy) >= 0.01).then(|| dy.atan2(dx))
     }
 
+    /// The path at arc length `s` (clamped to the path): position, head height and
+    /// arc length; `t` and `speed` are those of the point before it.
+    pub fn sample_at_s(&self, s: f64) -> Waypoint {
+        let Some(first) = self.points.first() else {
+            return Waypoint::default();
+        };
+        let last = self.points.last().unwrap();
+        let s = s.clamp(first.s, last.s);
+        let i = self
+            .points
+            .partition_point(|p| p.s <= s)
+            .clamp(1, self.points.len());
+        let a = &self.points[i - 1];
+        let Some(b) = self.points.get(i) else {
+            return Self::waypoint(a, self.start_time + a.t);
+        };
+        let f = if b.s > a.s {
+            (s - a.s) / (b.s - a.s)
+        } else {
+            0.0
+        };
+        let lerp = |u: f64, v: f64| u + (v - u) * f;
+        let head = lerp(a.head_height, b.head_height);
+        Waypoint {
+            t: self.start_time + a.t,
+            position: [
+                lerp(a.x, b.x),
+                lerp(a.y, b.y),
+                lerp(a.ground, b.ground) + head,
+            ],
+            head_height: head,
+            speed: a.v,
+            s,
+        }
+    }
+
+    /// How far along the path \[m\] the plan at time `now` is ahead of the path point
+    /// nearest (x, y): the head's lag, 0 where it is ahead.
+    pub fn lag_at(&self, now: f64, x: f64, y: f64) -> f64 {
+        self.closest_point(x, y).map_or(0.0, |(i, _)| {
+            (self.sample_at(now).s - self.points[i].s).max(0.0)
+        })
+    }
+
     /// Index of the path point nearest to (x, y) and its distance \[m\].
     pub fn closest_point(&self, x: f64, y: f64) -> Option<(usize, f64)> {
         self.points

@@ -3,8 +3,9 @@
 use plamo_interfaces::Tick;
 use plamo_planner::synthetic::{ball_scene, flat_scene, pyramid_scene, slalom_scene};
 use plamo_planner::{
-    ExternalObstacle, PlanError, PlanStatus, Planner, PlannerInput, PlannerOutput, PlannerSettings,
-    Prediction, ReplanReason, Trajectory, UnreachableReason, predict_conflict,
+    External, ExternalObstacle, PlanError, PlanStatus, Planner, PlannerInput, PlannerOutput,
+    PlannerSettings, Prediction, ReplanReason, Trajectory, UnreachableReason, predict_conflict,
+    predict_conflict_with,
 };
 use plamo_scenes::{Footprint, ObstacleShape, ObstacleState, Region, Scene, Wall};
 
@@ -831,4 +832,111 @@ fn a_path_keeps_off_a_cliff_as_off_a_wall() {
     assert!(d >= clear - 0.08, "{d} m from the cliff");
     let d = closest(0.0);
     assert!(d < 0.26, "without the clearance: {d} m from the cliff");
+}
+
+/// Whether the collision sweep finds a conflict at any control step of the 2 s before
+/// `meet`, with the head `lag` metres of path behind the plan.
+fn conflict_before(
+    plan: &Trajectory,
+    scene: &Scene,
+    s: &PlannerSettings,
+    meet: f64,
+    lag: f64,
+) -> bool {
+    (0..60).any(|k| {
+        let now = meet - 2.0 + k as f64 / 30.0;
+        predict_conflict_with(plan, scene, External::NONE, s, now, lag, Prediction::Rules).is_some()
+    })
+}
+
+#[test]
+fn the_sweep_covers_a_crawlers_body_behind_its_head() {
+    // The corridor's ball crosses y = 5 at t = 7.5 s (radius 0.3, 2 m/s), on a line
+    // 0.9 m behind where the crawl's head is then: the head has crossed it well
+    // before (crawls are slower than 1 m/s) and keeps 0.8 m off the ball, the
+    // trunk and legs (`crawl_body_length`, 1.3 m behind the head) have not.
+    let meet = 7.5;
+    let probe = Planner::new(
+        ball_scene(100.0),
+        "crawl from the a to the b",
+        [2.0, 5.0],
+        PlannerSettings::default(),
+    )
+    .unwrap();
+    let plan = probe.route()[0].clone();
+    let w = plan.sample_at(meet);
+    assert!(w.head_height < 0.45, "crawling by then: {w:?}");
+    let scene = ball_scene(w.position[0] - 0.9);
+    let s = PlannerSettings::default();
+    assert!(
+        conflict_before(&plan, &scene, &s, meet, 0.0),
+        "the body behind the head meets the ball"
+    );
+    // A crawl no longer than the capsule's radius: the capsule at the head only.
+    let head_only = PlannerSettings {
+        crawl_body_length: s.character_radius,
+        ..Default::default()
+    };
+    assert!(
+        !conflict_before(&plan, &scene, &head_only, meet, 0.0),
+        "the head alone passed before the ball"
+    );
+    // A walker's body is under its head: the setting changes nothing for a walk.
+    let walk = Planner::new(
+        ball_scene(100.0),
+        "walk from the a to the b",
+        [2.0, 5.0],
+        s.clone(),
+    )
+    .unwrap()
+    .route()[0]
+        .clone();
+    for behind in [0.3, 0.9, 1.5] {
+        let scene = ball_scene(walk.sample_at(meet).position[0] - behind);
+        assert_eq!(
+            conflict_before(&walk, &scene, &s, meet, 0.0),
+            conflict_before(&walk, &scene, &head_only, meet, 0.0),
+            "a walk with the ball's line {behind} m behind its head"
+        );
+    }
+}
+
+#[test]
+fn the_sweep_follows_a_head_that_lags_its_plan() {
+    // A walk whose plan crosses the ball's line 0.75 s before the ball: a head on
+    // the plan passes 1 m off it, one 1.5 m behind the plan meets it.
+    let meet = 7.5;
+    let s = PlannerSettings::default();
+    let plan = Planner::new(
+        ball_scene(100.0),
+        "walk from the a to the b",
+        [2.0, 5.0],
+        s.clone(),
+    )
+    .unwrap()
+    .route()[0]
+        .clone();
+    let w = plan.sample_at(meet);
+    assert!(w.speed > 1.5, "walking at full speed by then: {w:?}");
+    let scene = ball_scene(w.position[0] - 1.5);
+    assert!(
+        !conflict_before(&plan, &scene, &s, meet, 0.0),
+        "a head on its plan passes first"
+    );
+    assert!(
+        conflict_before(&plan, &scene, &s, meet, 1.5),
+        "a head 1.5 m behind meets the ball"
+    );
+    let plan_only = PlannerSettings {
+        lag_sweep_max: 0.0,
+        ..Default::default()
+    };
+    assert!(
+        !conflict_before(&plan, &scene, &plan_only, meet, 1.5),
+        "lag_sweep_max 0 sweeps the plan only"
+    );
+    // The lag the planner measures: how far along the path the plan is ahead of a head.
+    let back = plan.sample_at_s(w.s - 1.5);
+    let lag = plan.lag_at(meet, back.position[0], back.position[1]);
+    assert!((lag - 1.5).abs() < 0.1, "lag {lag}");
 }
