@@ -834,6 +834,20 @@ fn a_path_keeps_off_a_cliff_as_off_a_wall() {
     assert!(d < 0.26, "without the clearance: {d} m from the cliff");
 }
 
+/// The first leg's plan across the ball corridor (its ball out of the way) in form
+/// `verb`, with default settings.
+fn corridor_plan(verb: &str) -> Trajectory {
+    let instructions = format!("{verb} from the a to the b");
+    let planner = Planner::new(
+        ball_scene(100.0),
+        &instructions,
+        [2.0, 5.0],
+        PlannerSettings::default(),
+    )
+    .unwrap();
+    planner.route()[0].clone()
+}
+
 /// Whether the collision sweep finds a conflict at any control step of the 2 s before
 /// `meet`, with the head `lag` metres of path behind the plan.
 fn conflict_before(
@@ -856,14 +870,7 @@ fn the_sweep_covers_a_crawlers_body_behind_its_head() {
     // before (crawls are slower than 1 m/s) and keeps 0.8 m off the ball, the
     // trunk and legs (`crawl_body_length`, 1.3 m behind the head) have not.
     let meet = 7.5;
-    let probe = Planner::new(
-        ball_scene(100.0),
-        "crawl from the a to the b",
-        [2.0, 5.0],
-        PlannerSettings::default(),
-    )
-    .unwrap();
-    let plan = probe.route()[0].clone();
+    let plan = corridor_plan("crawl");
     let w = plan.sample_at(meet);
     assert!(w.head_height < 0.45, "crawling by then: {w:?}");
     let scene = ball_scene(w.position[0] - 0.9);
@@ -882,15 +889,7 @@ fn the_sweep_covers_a_crawlers_body_behind_its_head() {
         "the head alone passed before the ball"
     );
     // A walker's body is under its head: the setting changes nothing for a walk.
-    let walk = Planner::new(
-        ball_scene(100.0),
-        "walk from the a to the b",
-        [2.0, 5.0],
-        s.clone(),
-    )
-    .unwrap()
-    .route()[0]
-        .clone();
+    let walk = corridor_plan("walk");
     for behind in [0.3, 0.9, 1.5] {
         let scene = ball_scene(walk.sample_at(meet).position[0] - behind);
         assert_eq!(
@@ -907,15 +906,7 @@ fn the_sweep_follows_a_head_that_lags_its_plan() {
     // the plan passes 1 m off it, one 1.5 m behind the plan meets it.
     let meet = 7.5;
     let s = PlannerSettings::default();
-    let plan = Planner::new(
-        ball_scene(100.0),
-        "walk from the a to the b",
-        [2.0, 5.0],
-        s.clone(),
-    )
-    .unwrap()
-    .route()[0]
-        .clone();
+    let plan = corridor_plan("walk");
     let w = plan.sample_at(meet);
     assert!(w.speed > 1.5, "walking at full speed by then: {w:?}");
     let scene = ball_scene(w.position[0] - 1.5);
