@@ -175,12 +175,12 @@ pub fn predict_conflict(
     now: f64,
     how: Prediction,
 ) -> Option<Conflict> {
-    predict_conflict_with(traj, scene, External::NONE, s, now, 0.0, how)
+    predict_conflict_with(traj, scene, External::NONE, s, now, None, how)
 }
 
 /// [`predict_conflict`] over the scene's obstacles and then the host's `external`
-/// ones (their conflicts are numbered after the scene's), for a head `lag` metres of
-/// path behind the plan at `now` ([`Trajectory::lag_at`]).
+/// ones (their conflicts are numbered after the scene's), for a head at `head` (x, y)
+/// that may lag the plan at `now` ([`Trajectory::lag_at`]; `None`: on the plan).
 ///
 /// The character is a vertical capsule from the ground to the head, swept along the
 /// plan and, behind each plan point, along the path as far as the head lags it (at
@@ -195,7 +195,7 @@ pub fn predict_conflict_with(
     external: External,
     s: &PlannerSettings,
     now: f64,
-    lag: f64,
+    head: Option<[f64; 2]>,
     how: Prediction,
 ) -> Option<Conflict> {
     let nd = scene.dynamic.len();
@@ -210,7 +210,8 @@ pub fn predict_conflict_with(
     let dt = s.collision_dt;
     let steps = (s.collision_horizon / dt).ceil() as usize;
     let r = s.character_radius;
-    let lag = lag.clamp(0.0, s.lag_sweep_max);
+    // Measured only with obstacles to sweep against (a scan of the whole path).
+    let lag = head.map_or(0.0, |[x, y]| traj.lag_at(now, x, y).min(s.lag_sweep_max));
     // How far behind a plan point's head its body lies: a crawl's length less the
     // capsule's radius at `crawl_height`, none from `crouch_height` up.
     let body_behind = |head: f64| {

@@ -737,7 +737,8 @@ impl Planner {
             }
             let tr = Trajectory::new(now, pts);
             // The detour starts from the head: no lag.
-            let again = predict_conflict_with(&tr, &self.scene, self.external(), &s, now, 0.0, how);
+            let again =
+                predict_conflict_with(&tr, &self.scene, self.external(), &s, now, None, how);
             best = Some(tr);
             match again {
                 Some(c) => conflict = c,
@@ -861,7 +862,7 @@ impl Planner {
                 self.external(),
                 &self.settings,
                 now,
-                tr.lag_at(now, hx, hy),
+                Some([hx, hy]),
                 how,
             )
         {

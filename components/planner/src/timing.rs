@@ -111,15 +111,26 @@ impl Trajectory {
         };
         let s_in = (a.v * tau + 0.5 * acc * tau * tau).clamp(0.0, ds);
         let f = if ds > 0.0 { s_in / ds } else { 0.0 };
+        let mut w = Self::between(a, b, f, t, a.s + s_in);
+        w.speed = (a.v + acc * tau).max(0.0);
+        w
+    }
+
+    /// The waypoint a share `f` of the way from `a` to `b`, at time `t` and arc
+    /// length `s`, with `a`'s speed.
+    fn between(a: &PathPoint, b: &PathPoint, f: f64, t: f64, s: f64) -> Waypoint {
         let lerp = |u: f64, v: f64| u + (v - u) * f;
-        let ground = lerp(a.ground, b.ground);
         let head = lerp(a.head_height, b.head_height);
         Waypoint {
             t,
-            position: [lerp(a.x, b.x), lerp(a.y, b.y), ground + head],
+            position: [
+                lerp(a.x, b.x),
+                lerp(a.y, b.y),
+                lerp(a.ground, b.ground) + head,
+            ],
             head_height: head,
-            speed: (a.v + acc * tau).max(0.0),
-            s: a.s + s_in,
+            speed: a.v,
+            s,
         }
     }
 
@@ -163,19 +174,7 @@ impl Trajectory {
         } else {
             0.0
         };
-        let lerp = |u: f64, v: f64| u + (v - u) * f;
-        let head = lerp(a.head_height, b.head_height);
-        Waypoint {
-            t: self.start_time + a.t,
-            position: [
-                lerp(a.x, b.x),
-                lerp(a.y, b.y),
-                lerp(a.ground, b.ground) + head,
-            ],
-            head_height: head,
-            speed: a.v,
-            s,
-        }
+        Self::between(a, b, f, self.start_time + a.t, s)
     }
 
     /// How far along the path \[m\] the plan at time `now` is ahead of the path point

@@ -859,7 +859,11 @@ fn conflict_before(
 ) -> bool {
     (0..60).any(|k| {
         let now = meet - 2.0 + k as f64 / 30.0;
-        predict_conflict_with(plan, scene, External::NONE, s, now, lag, Prediction::Rules).is_some()
+        // The head where the path is `lag` metres short of the plan's point.
+        let at = plan.sample_at_s(plan.sample_at(now).s - lag).position;
+        let head = (lag > 0.0).then_some([at[0], at[1]]);
+        predict_conflict_with(plan, scene, External::NONE, s, now, head, Prediction::Rules)
+            .is_some()
     })
 }
 
