@@ -12,9 +12,9 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use plamo_planner::synthetic::{ball_scene, hills_scene};
 use plamo_planner::{
-    AStar, AltLandmarks, Components, Heuristic, PlanGrid, Planner, PlannerSettings, Prediction,
-    SearchLimits, SpeedProblem, forward_backward, predict_conflict, solve_speed_qp,
-    solve_speed_socp,
+    AStar, AltLandmarks, Components, External, Heuristic, PlanGrid, Planner, PlannerSettings,
+    Prediction, SearchLimits, SpeedProblem, forward_backward, plan_wait, predict_conflict,
+    solve_speed_qp, solve_speed_socp,
 };
 use plamo_scenes::{Footprint, Wall, builtin};
 use rand::{Rng, SeedableRng};
@@ -279,6 +279,23 @@ fn bench_replan(c: &mut Criterion) {
                 planner
                     .replan_around(&old, conflict, from, now, Prediction::Rules)
                     .unwrap(),
+            )
+        })
+    });
+    g.bench_function("wait_for_ball", |b| {
+        b.iter(|| {
+            black_box(
+                plan_wait(
+                    &old,
+                    &conflict,
+                    &scene,
+                    External::NONE,
+                    &s,
+                    now,
+                    Some(from),
+                    Prediction::Rules,
+                )
+                .unwrap(),
             )
         })
     });

@@ -1,7 +1,7 @@
 //! Stage 6: dynamic obstacles. Predict each obstacle's motion, sweep the character's
 //! capsule along the timed plan against it (parry3d time-of-impact shape casts, one
 //! linear cast per `collision_dt` slice), and report the first predicted contact
-//! within the horizon (paper: 1.5 s).
+//! within the horizon (paper: 1.5 s; longer for a slow plan, `collision_lookahead`).
 //!
 //! Obstacles come from the scene (motion rules, or observed states in scene order)
 //! and from the host ([`ExternalObstacle`]: e.g. a car a co-simulation host drives,
@@ -164,8 +164,19 @@ fn obstacle_shape(shape: ObstacleShape, st: &ObstacleState) -> (Box<dyn Shape>, 
     }
 }
 
+/// How far ahead \[s\] the sweep looks from `now`: `collision_horizon`, or longer
+/// where the plan takes longer to cover `collision_lookahead`.
+pub(crate) fn sweep_horizon(traj: &Trajectory, s: &PlannerSettings, now: f64) -> f64 {
+    if s.collision_lookahead <= 0.0 {
+        return s.collision_horizon;
+    }
+    let ahead = traj.sample_at(now).s + s.collision_lookahead;
+    s.collision_horizon.max(traj.time_at_s(ahead) - now)
+}
+
 /// The first predicted contact between the plan and any scene obstacle in
-/// \[now, now + horizon\], closer than `obstacle_margin`; the plan is taken as the
+/// \[now, now + horizon\] (`collision_horizon`, or as long as the plan takes to cover
+/// `collision_lookahead`), closer than `obstacle_margin`; the plan is taken as the
 /// body's, with nothing behind its head ([`predict_conflict_with`] for a lagging
 /// or crawling body).
 pub fn predict_conflict(
@@ -208,7 +219,7 @@ pub fn predict_conflict_with(
     };
     let state = |k: usize, t: f64| predict_any(scene, external, how, now, k, t);
     let dt = s.collision_dt;
-    let steps = (s.collision_horizon / dt).ceil() as usize;
+    let steps = (sweep_horizon(traj, s, now) / dt).ceil() as usize;
     let r = s.character_radius;
     // Measured only with obstacles to sweep against (a scan of the whole path).
     let lag = head.map_or(0.0, |[x, y]| traj.lag_at(now, x, y).min(s.lag_sweep_max));

@@ -27,6 +27,7 @@ mod speed_oracle;
 mod speed_qp;
 pub mod synthetic;
 mod timing;
+mod wait;
 
 pub use alt::{ALT_ACTIVE, AltLandmarks};
 pub use astar::{AStar, CrawlBody, GridPath, Heuristic, Posture, SearchLimits};
@@ -49,6 +50,7 @@ pub use settings::PlannerSettings;
 pub use speed_oracle::{SpeedProblem, forward_backward, travel_time};
 pub use speed_qp::{solve_speed_qp, solve_speed_socp};
 pub use timing::{Trajectory, Waypoint};
+pub use wait::plan_wait;
 
 #[cfg(test)]
 pub(crate) mod test_scenes {

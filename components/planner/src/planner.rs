@@ -18,6 +18,7 @@ use crate::grid::PlanGrid;
 use crate::refine::{PathPoint, RefineCtx, annotate, refine};
 use crate::speed_oracle::SpeedProblem;
 use crate::speed_qp::solve_speed_qp;
+use crate::wait::plan_wait;
 use crate::{
     Instruction, Locomotion, PlanError, PlannerSettings, Source, Trajectory, UnreachableReason,
     Waypoint, parse_instructions,
@@ -55,6 +56,9 @@ pub enum ReplanReason {
     Lag,
     /// A dynamic obstacle was predicted to hit the plan (local re-plan).
     Obstacle(Conflict),
+    /// A dynamic obstacle was predicted to hit the plan, which now stops short of it
+    /// and waits for it to pass.
+    Wait(Conflict),
 }
 
 /// Outcome of a step (not an error).
@@ -866,15 +870,53 @@ impl Planner {
                 how,
             )
         {
-            match self.replan_around(&tr, conflict, [hx, hy], now, how) {
-                Ok(new) => {
+            let head = Some([hx, hy]);
+            let wait = plan_wait(
+                &tr,
+                &conflict,
+                &self.scene,
+                self.external(),
+                &self.settings,
+                now,
+                head,
+                how,
+            );
+            // A conflict only the look-ahead sees (beyond `collision_horizon`) is
+            // waited for, or left until it comes within the horizon: detours that far
+            // ahead sent crawlers the long way round (session 49).
+            let far = conflict.time > now + self.settings.collision_horizon;
+            let detour = (!far).then(|| self.replan_around(&tr, conflict, [hx, hy], now, how));
+            // Wait when the detour arrives little sooner, or is no way out.
+            let waits = wait.as_ref().is_some_and(|w| match &detour {
+                None | Some(Err(_)) => true,
+                Some(Ok(d)) => {
+                    w.end_time() <= d.end_time() + self.settings.wait_preference
+                        || predict_conflict_with(
+                            d,
+                            &self.scene,
+                            self.external(),
+                            &self.settings,
+                            now,
+                            None,
+                            how,
+                        )
+                        .is_some()
+                }
+            });
+            match (wait, detour) {
+                (Some(w), _) if waits => {
+                    self.current = Some(Arc::new(w));
+                    replanned = Some(ReplanReason::Wait(conflict));
+                }
+                (_, Some(Ok(new))) => {
                     self.current = Some(Arc::new(new));
                     replanned = Some(ReplanReason::Obstacle(conflict));
                 }
-                Err(PlanError::Unreachable { index, reason, .. }) => {
+                (_, Some(Err(PlanError::Unreachable { index, reason, .. }))) => {
                     status = PlanStatus::Infeasible { index, reason };
                 }
-                Err(e) => return Err(e),
+                (_, Some(Err(e))) => return Err(e),
+                (_, None) => {}
             }
         }
         let tr = match &self.current {

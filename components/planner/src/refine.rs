@@ -32,6 +32,10 @@ pub struct PathPoint {
     pub v: f64,
     /// Planned time of passage, relative to the trajectory start \[s\].
     pub t: f64,
+    /// Time held at rest before this point \[s\]: set on the second of two points at
+    /// one place (a wait for an obstacle to pass), 0 elsewhere.
+    #[serde(default)]
+    pub wait: f64,
 }
 
 impl PathPoint {

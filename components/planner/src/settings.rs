@@ -255,6 +255,11 @@ pub struct PlannerSettings {
     pub head_height_rate: f64,
     /// Dynamic obstacles: look-ahead for predicted collisions \[s\]. Paper: 1.5.
     pub collision_horizon: f64,
+    /// Dynamic obstacles: the look-ahead also covers the plan's next this many metres
+    /// \[m\] (not in the paper): a crawler at 0.5 m/s needs 5-6 s to get its 1.3 m
+    /// body across a ball's way, and entered it with the ball 1.5 s off. Default 3.
+    /// 0 = `collision_horizon` alone (the paper).
+    pub collision_lookahead: f64,
     /// Time step of the collision sweep \[s\]. Default 0.1.
     pub collision_dt: f64,
     /// Extra distance kept from dynamic obstacles \[m\]. Default 0.2.
@@ -282,6 +287,23 @@ pub struct PlannerSettings {
     /// Local re-plan: arc length of old path re-timed after the rejoin point \[m\].
     /// Default 20.
     pub replan_speed_horizon: f64,
+    /// Waiting for an obstacle to pass (not in the paper): the longest wait tried
+    /// where the plan stops short of a predicted conflict instead of detouring \[s\].
+    /// 0 = never wait, detour only (the paper). Default 6.
+    pub max_wait: f64,
+    /// Waiting: the largest deceleration when stopping to wait \[m/s^2\], > 0.
+    /// Default 1.0.
+    pub wait_deceleration: f64,
+    /// Waiting: distance kept from the obstacle by a plan that waits for it, on top
+    /// of `obstacle_margin` \[m\]: a humanoid coming to rest overshoots its stop
+    /// and steps forward (a walker stopped 0.14 m past it with the passing box's
+    /// surface 0.44 m from its root, and its body came within 0.1 m of the box:
+    /// `plamo eval dynamic`, scene 16). Default 0.3.
+    pub wait_margin: f64,
+    /// Waiting: the plan waits rather than detours when it arrives at most this much
+    /// later than the detour would \[s\] (either way when the detour is still
+    /// predicted to collide: waiting). Default 1.0.
+    pub wait_preference: f64,
     /// Full re-plan when the head is farther than this from the path \[m\]. Default 1.0.
     pub drift_distance: f64,
     /// Full re-plan when the head lags the timed plan by more than this \[m\]. Default 2.0.
@@ -344,6 +366,7 @@ impl Default for PlannerSettings {
             curvature_window: 0.3,
             head_height_rate: 0.5,
             collision_horizon: 1.5,
+            collision_lookahead: 3.0,
             collision_dt: 0.1,
             obstacle_margin: 0.2,
             lag_sweep_max: 2.0,
@@ -351,6 +374,10 @@ impl Default for PlannerSettings {
             rejoin_distance: 2.0,
             replan_window_margin: 3.0,
             replan_speed_horizon: 20.0,
+            max_wait: 6.0,
+            wait_deceleration: 1.0,
+            wait_margin: 0.3,
+            wait_preference: 1.0,
             drift_distance: 1.0,
             lag_distance: 2.0,
             waypoint_count: 10,
@@ -398,6 +425,7 @@ impl PlannerSettings {
             ("drift_distance", self.drift_distance),
             ("lag_distance", self.lag_distance),
             ("waypoint_dt", self.waypoint_dt),
+            ("wait_deceleration", self.wait_deceleration),
         ];
         for (field, v) in positive {
             if !(v.is_finite() && v > 0.0) {
@@ -423,6 +451,10 @@ impl PlannerSettings {
             ("obstacle_margin", self.obstacle_margin),
             ("lag_sweep_max", self.lag_sweep_max),
             ("obstacle_sweep", self.obstacle_sweep),
+            ("max_wait", self.max_wait),
+            ("collision_lookahead", self.collision_lookahead),
+            ("wait_margin", self.wait_margin),
+            ("wait_preference", self.wait_preference),
             ("goal_depth", self.goal_depth),
         ];
         for (field, v) in non_negative {

@@ -34,7 +34,8 @@ pub struct Trajectory {
 }
 
 impl Trajectory {
-    /// Build from points with speeds set; fills the passage times.
+    /// Build from points with speeds set; fills the passage times. A point at the
+    /// same arc length as the one before it is reached `wait` seconds after it.
     pub fn new(start_time: f64, mut points: Vec<PathPoint>) -> Self {
         let mut t = 0.0;
         if let Some(p) = points.first_mut() {
@@ -44,7 +45,7 @@ impl Trajectory {
             let ds = points[i].s - points[i - 1].s;
             let vs = points[i - 1].v + points[i].v;
             t += if ds <= 0.0 {
-                0.0
+                points[i].wait
             } else if vs > 1e-9 {
                 2.0 * ds / vs
             } else {
@@ -177,6 +178,31 @@ impl Trajectory {
         Self::between(a, b, f, self.start_time + a.t, s)
     }
 
+    /// Absolute time \[s\] at which the plan first reaches arc length `s`: the start
+    /// time before the path, the end time beyond it.
+    pub fn time_at_s(&self, s: f64) -> f64 {
+        let i = self.points.partition_point(|p| p.s < s);
+        if i == 0 || i == self.points.len() {
+            return self.start_time + self.points.get(i).map_or(self.duration(), |p| p.t);
+        }
+        let (a, b) = (&self.points[i - 1], &self.points[i]);
+        let ds = b.s - a.s;
+        let acc = (b.v * b.v - a.v * a.v) / (2.0 * ds);
+        let s_in = s - a.s;
+        // s_in = v tau + acc tau^2 / 2, on a segment travelled at constant acceleration.
+        let tau = if acc.abs() < 1e-12 {
+            if a.v > 1e-12 {
+                s_in / a.v
+            } else {
+                f64::INFINITY
+            }
+        } else {
+            let d = a.v * a.v + 2.0 * acc * s_in;
+            (d.max(0.0).sqrt() - a.v) / acc
+        };
+        self.start_time + a.t + tau.clamp(0.0, b.t - a.t)
+    }
+
     /// How far along the path \[m\] the plan at time `now` is ahead of the path point
     /// nearest (x, y): the head's lag, 0 where it is ahead.
     pub fn lag_at(&self, now: f64, x: f64, y: f64) -> f64 {
@@ -262,6 +288,19 @@ mod tests {
         let end = tr.sample_at(100.0);
         assert_eq!(end.position[0], 10.0);
         assert_eq!(end.speed, 0.0);
+    }
+
+    #[test]
+    fn time_at_s_inverts_sample_at() {
+        let v: Vec<f64> = (0..21).map(|i| 0.5 + 0.1 * i as f64).collect();
+        let tr = straight(&v);
+        for k in 1..40 {
+            let t = 10.0 + 0.25 * k as f64;
+            let w = tr.sample_at(t);
+            assert!((tr.time_at_s(w.s) - t).abs() < 1e-9, "t {t}");
+        }
+        assert_eq!(tr.time_at_s(-1.0), 10.0);
+        assert_eq!(tr.time_at_s(99.0), tr.end_time());
     }
 
     #[test]

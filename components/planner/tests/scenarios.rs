@@ -250,11 +250,12 @@ fn unreachable_target_fails_fast_naming_the_instruction() {
     assert!(err.to_string().contains("instruction 1"));
 }
 
-#[test]
-fn dynamic_replan_avoids_a_ball_crossing_the_path() {
-    // A ball rolls across the corridor (along +Y, 2 m/s, at y = 5 when t = 2.5 + 5k s).
-    // Put its line where the runner's plan is at t = 7.5 s, so they would meet.
-    let s = PlannerSettings::default();
+/// The runner of the corridor crosses the line of a ball rolling across it (along +Y,
+/// 2 m/s, at y = 5 when t = 2.5 + 5k s), put where the runner's plan is at t = 7.5 s
+/// so that they would meet; the humanoid follows the current plan exactly for 12 s.
+/// Returns the obstacle re-plans (with the time each was made) and the closest
+/// approach of head and ball \[m\].
+fn cross_a_rolling_ball(s: &PlannerSettings) -> (Vec<(f64, ReplanReason)>, f64) {
     let probe = Planner::new(
         ball_scene(100.0),
         "run from the a to the b",
@@ -274,16 +275,15 @@ fn dynamic_replan_avoids_a_ball_crossing_the_path() {
     .unwrap();
     assert!(
         (0..300).any(
-            |k| predict_conflict(&plan, &scene, &s, k as f64 / 30.0, Prediction::Rules).is_some()
+            |k| predict_conflict(&plan, &scene, s, k as f64 / 30.0, Prediction::Rules).is_some()
         ),
         "the unmodified plan runs into the ball"
     );
-    let mut replanned = 0;
+    let mut replans = vec![];
     let mut min_gap = f64::INFINITY;
     let mut tick = 0u64;
     while tick < 120 * 12 {
         let now = tick as f64 / 120.0;
-        // The humanoid follows the current plan exactly.
         let w = p
             .current()
             .map_or(plan.sample_at(now), |c| c.sample_at(now));
@@ -299,11 +299,11 @@ fn dynamic_replan_avoids_a_ball_crossing_the_path() {
             "{:?}",
             out.status
         );
-        if let Some(ReplanReason::Obstacle(_)) = out.replanned {
-            replanned += 1;
+        if let Some(r @ (ReplanReason::Obstacle(_) | ReplanReason::Wait(_))) = out.replanned {
+            replans.push((now, r));
             let tr = p.current().unwrap();
             assert!(
-                predict_conflict(tr, &scene, &s, now, Prediction::Rules).is_none(),
+                predict_conflict(tr, &scene, s, now, Prediction::Rules).is_none(),
                 "the new plan is clear of the ball at t = {now}"
             );
         }
@@ -311,8 +311,42 @@ fn dynamic_replan_avoids_a_ball_crossing_the_path() {
         min_gap = min_gap.min((b[0] - w.position[0]).hypot(b[1] - w.position[1]));
         tick += 4;
     }
-    assert!(replanned >= 1, "re-planned around the ball");
+    (replans, min_gap)
+}
+
+#[test]
+fn dynamic_replan_avoids_a_ball_crossing_the_path() {
+    // Detours only, as in the paper.
+    let s = PlannerSettings {
+        max_wait: 0.0,
+        ..Default::default()
+    };
+    let (replans, min_gap) = cross_a_rolling_ball(&s);
+    assert!(!replans.is_empty(), "re-planned around the ball");
+    assert!(
+        replans
+            .iter()
+            .all(|(_, r)| matches!(r, ReplanReason::Obstacle(_))),
+        "max_wait 0 never waits: {replans:?}"
+    );
     // Ball radius 0.3 + character radius 0.3.
+    assert!(min_gap > 0.6, "closest approach {min_gap} m");
+}
+
+#[test]
+fn a_plan_that_waits_lets_the_ball_pass_and_goes_on() {
+    // The ball crosses the runner's line 2 m/s across a straight path: stopping
+    // short of its line for a moment costs less than a detour behind it.
+    let s = PlannerSettings::default();
+    let (replans, min_gap) = cross_a_rolling_ball(&s);
+    let Some(&(t, ReplanReason::Wait(c))) = replans.first() else {
+        panic!("the first obstacle re-plan waits: {replans:?}");
+    };
+    assert!(
+        t < c.time,
+        "waits before the predicted contact at {}",
+        c.time
+    );
     assert!(min_gap > 0.6, "closest approach {min_gap} m");
 }
 
@@ -333,6 +367,7 @@ fn with_obstacle_sweep_the_detour_passes_behind_a_crossing_ball() {
     let side = |sweep: f64| {
         let s = PlannerSettings {
             obstacle_sweep: sweep,
+            max_wait: 0.0,
             ..Default::default()
         };
         let mut p = Planner::new(scene.clone(), "run from the a to the b", [2.0, 5.0], s).unwrap();
@@ -934,4 +969,87 @@ fn the_sweep_follows_a_head_that_lags_its_plan() {
     let back = plan.sample_at_s(w.s - 1.5);
     let lag = plan.lag_at(meet, back.position[0], back.position[1]);
     assert!((lag - 1.5).abs() < 0.1, "lag {lag}");
+}
+
+#[test]
+fn the_sweep_looks_as_far_ahead_as_a_slow_crawl_needs() {
+    // The ball of the corridor crosses the crawler's way where its plan is at 7.5 s;
+    // at 5 s the paper's 1.5 s horizon ends with the ball still 2 m off.
+    let probe = Planner::new(
+        ball_scene(100.0),
+        "crawl from the a to the b",
+        [2.0, 5.0],
+        PlannerSettings::default(),
+    )
+    .unwrap();
+    let plan = probe.route()[0].clone();
+    let scene = ball_scene(plan.sample_at(7.5).position[0]);
+    let now = 5.0;
+    let s = PlannerSettings::default();
+    let c = predict_conflict(&plan, &scene, &s, now, Prediction::Rules)
+        .expect("the crossing is within the crawl's next 3 m");
+    assert!(
+        c.time > now + s.collision_horizon,
+        "found beyond the paper's horizon: {c:?}"
+    );
+    let paper = PlannerSettings {
+        collision_lookahead: 0.0,
+        ..Default::default()
+    };
+    assert_eq!(
+        predict_conflict(&plan, &scene, &paper, now, Prediction::Rules),
+        None,
+        "1.5 s alone misses it"
+    );
+}
+
+#[test]
+fn beyond_the_papers_horizon_a_crawler_only_waits() {
+    // The crawler and ball of the test above, the crawler on its plan from the start.
+    let probe = Planner::new(
+        ball_scene(100.0),
+        "crawl from the a to the b",
+        [2.0, 5.0],
+        PlannerSettings::default(),
+    )
+    .unwrap();
+    let scene = ball_scene(probe.route()[0].sample_at(7.5).position[0]);
+    // The obstacle re-plans of 10 s on the plan: (time, reason).
+    let replans = |s: PlannerSettings| {
+        let mut p =
+            Planner::new(scene.clone(), "crawl from the a to the b", [2.0, 5.0], s).unwrap();
+        (0..120 * 10)
+            .step_by(4)
+            .filter_map(|tick| {
+                let r = step_on_plan(&mut p, tick).replanned;
+                let now = tick as f64 / 120.0;
+                match r {
+                    Some(r @ (ReplanReason::Obstacle(_) | ReplanReason::Wait(_))) => Some((now, r)),
+                    _ => None,
+                }
+            })
+            .collect::<Vec<_>>()
+    };
+    let horizon = PlannerSettings::default().collision_horizon;
+    let waits = replans(PlannerSettings::default());
+    match waits.first() {
+        Some(&(now, ReplanReason::Wait(c))) => assert!(
+            c.time > now + horizon,
+            "waits before the paper's horizon sees the ball: {waits:?}"
+        ),
+        other => panic!("the first re-plan waits: {other:?}"),
+    }
+    // Without waiting, the look-ahead's conflicts are left until they come within the
+    // horizon: no detour that far ahead.
+    let detours = replans(PlannerSettings {
+        max_wait: 0.0,
+        ..Default::default()
+    });
+    assert!(!detours.is_empty(), "detours once within the horizon");
+    for (now, r) in &detours {
+        let ReplanReason::Obstacle(c) = r else {
+            panic!("max_wait 0 never waits: {r:?}");
+        };
+        assert!(c.time <= now + horizon + 1e-9, "{now}: {c:?}");
+    }
 }
