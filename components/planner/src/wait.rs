@@ -117,8 +117,8 @@ pub(crate) fn hold(
 /// stops as close before the obstacle's way as the sweep allows and waits as
 /// briefly as it can (at most `max_wait`), such that the sweep, keeping
 /// `wait_margin` more from the obstacle, finds no conflict until `collision_horizon`
-/// after it goes on, nor on the `collision_lookahead` metres past its stop. `None` when no such wait exists or
-/// waiting is off (`max_wait` 0).
+/// after it goes on, nor on the `collision_lookahead` metres past its stop. `None`
+/// when no such wait exists or waiting is off (`max_wait` 0).
 #[allow(clippy::too_many_arguments)]
 pub fn plan_wait(
     old: &Trajectory,

@@ -971,10 +971,9 @@ fn the_sweep_follows_a_head_that_lags_its_plan() {
     assert!((lag - 1.5).abs() < 0.1, "lag {lag}");
 }
 
-#[test]
-fn the_sweep_looks_as_far_ahead_as_a_slow_crawl_needs() {
-    // The ball of the corridor crosses the crawler's way where its plan is at 7.5 s;
-    // at 5 s the paper's 1.5 s horizon ends with the ball still 2 m off.
+/// A crawl along the corridor and the corridor's ball crossing its way where its
+/// plan is at 7.5 s: the crawl's start plan and the scene.
+fn a_crawl_meets_the_ball() -> (Trajectory, Scene) {
     let probe = Planner::new(
         ball_scene(100.0),
         "crawl from the a to the b",
@@ -984,6 +983,13 @@ fn the_sweep_looks_as_far_ahead_as_a_slow_crawl_needs() {
     .unwrap();
     let plan = probe.route()[0].clone();
     let scene = ball_scene(plan.sample_at(7.5).position[0]);
+    (plan, scene)
+}
+
+#[test]
+fn the_sweep_looks_as_far_ahead_as_a_slow_crawl_needs() {
+    // At 5 s the paper's 1.5 s horizon ends with the ball still 2 m off.
+    let (plan, scene) = a_crawl_meets_the_ball();
     let now = 5.0;
     let s = PlannerSettings::default();
     let c = predict_conflict(&plan, &scene, &s, now, Prediction::Rules)
@@ -1005,15 +1011,8 @@ fn the_sweep_looks_as_far_ahead_as_a_slow_crawl_needs() {
 
 #[test]
 fn beyond_the_papers_horizon_a_crawler_only_waits() {
-    // The crawler and ball of the test above, the crawler on its plan from the start.
-    let probe = Planner::new(
-        ball_scene(100.0),
-        "crawl from the a to the b",
-        [2.0, 5.0],
-        PlannerSettings::default(),
-    )
-    .unwrap();
-    let scene = ball_scene(probe.route()[0].sample_at(7.5).position[0]);
+    // The crawler on its plan from the start.
+    let (_, scene) = a_crawl_meets_the_ball();
     // The obstacle re-plans of 10 s on the plan: (time, reason).
     let replans = |s: PlannerSettings| {
         let mut p =
