@@ -578,6 +578,19 @@ impl Planner {
         now: f64,
         how: Prediction,
     ) -> Result<Trajectory, PlanError> {
+        self.detour(old, first, from, now, how).map(|(tr, _)| tr)
+    }
+
+    /// [`Planner::replan_around`], with the conflict the sweep still predicts for the
+    /// detour it returns (`None`: clear).
+    fn detour(
+        &mut self,
+        old: &Trajectory,
+        first: Conflict,
+        from: [f64; 2],
+        now: f64,
+        how: Prediction,
+    ) -> Result<(Trajectory, Option<Conflict>), PlanError> {
         if old.points.is_empty() {
             return Err(PlanError::InvalidInput {
                 field: "old",
@@ -743,7 +756,7 @@ impl Planner {
             // The detour starts from the head: no lag.
             let again =
                 predict_conflict_with(&tr, &self.scene, self.external(), &s, now, None, how);
-            best = Some(tr);
+            best = Some((tr, again));
             match again {
                 Some(c) => conflict = c,
                 None => break,
@@ -885,22 +898,12 @@ impl Planner {
             // waited for, or left until it comes within the horizon: detours that far
             // ahead sent crawlers the long way round (session 49).
             let far = conflict.time > now + self.settings.collision_horizon;
-            let detour = (!far).then(|| self.replan_around(&tr, conflict, [hx, hy], now, how));
+            let detour = (!far).then(|| self.detour(&tr, conflict, [hx, hy], now, how));
             // Wait when the detour arrives little sooner, or is no way out.
             let waits = wait.as_ref().is_some_and(|w| match &detour {
                 None | Some(Err(_)) => true,
-                Some(Ok(d)) => {
-                    w.end_time() <= d.end_time() + self.settings.wait_preference
-                        || predict_conflict_with(
-                            d,
-                            &self.scene,
-                            self.external(),
-                            &self.settings,
-                            now,
-                            None,
-                            how,
-                        )
-                        .is_some()
+                Some(Ok((d, still))) => {
+                    still.is_some() || w.end_time() <= d.end_time() + self.settings.wait_preference
                 }
             });
             match (wait, detour) {
@@ -908,7 +911,7 @@ impl Planner {
                     self.current = Some(Arc::new(w));
                     replanned = Some(ReplanReason::Wait(conflict));
                 }
-                (_, Some(Ok(new))) => {
+                (_, Some(Ok((new, _)))) => {
                     self.current = Some(Arc::new(new));
                     replanned = Some(ReplanReason::Obstacle(conflict));
                 }

@@ -157,25 +157,59 @@ impl Trajectory {
     /// The path at arc length `s` (clamped to the path): position, head height and
     /// arc length; `t` and `speed` are those of the point before it.
     pub fn sample_at_s(&self, s: f64) -> Waypoint {
-        let Some(first) = self.points.first() else {
+        let Some((a, b, f, s)) = self.segment_at_s(s) else {
             return Waypoint::default();
         };
-        let last = self.points.last().unwrap();
+        match b {
+            Some(b) => Self::between(a, b, f, self.start_time + a.t, s),
+            None => Self::waypoint(a, self.start_time + a.t),
+        }
+    }
+
+    /// The path point at arc length `s` (clamped to the path), every field
+    /// interpolated between its neighbours; `t` and `wait` are 0, for
+    /// [`Trajectory::new`] to fill.
+    pub(crate) fn point_at_s(&self, s: f64) -> PathPoint {
+        let Some((a, b, f, s)) = self.segment_at_s(s) else {
+            return PathPoint::default();
+        };
+        let Some(b) = b else {
+            return PathPoint { t: 0.0, ..*a };
+        };
+        let lerp = |u: f64, v: f64| u + (v - u) * f;
+        PathPoint {
+            x: lerp(a.x, b.x),
+            y: lerp(a.y, b.y),
+            ground: lerp(a.ground, b.ground),
+            head_height: lerp(a.head_height, b.head_height),
+            s,
+            curvature: lerp(a.curvature, b.curvature),
+            slope: lerp(a.slope, b.slope),
+            v_cap: lerp(a.v_cap, b.v_cap),
+            v: lerp(a.v, b.v),
+            t: 0.0,
+            wait: 0.0,
+        }
+    }
+
+    /// Where arc length `s` (clamped to the path) lies: the point before it, the one
+    /// after it (none at the path's end), the share of the way between them and the
+    /// clamped `s`. `None` for an empty path.
+    fn segment_at_s(&self, s: f64) -> Option<(&PathPoint, Option<&PathPoint>, f64, f64)> {
+        let first = self.points.first()?;
+        let last = self.points.last()?;
         let s = s.clamp(first.s, last.s);
         let i = self
             .points
             .partition_point(|p| p.s <= s)
             .clamp(1, self.points.len());
         let a = &self.points[i - 1];
-        let Some(b) = self.points.get(i) else {
-            return Self::waypoint(a, self.start_time + a.t);
+        let b = self.points.get(i);
+        let f = match b {
+            Some(b) if b.s > a.s => (s - a.s) / (b.s - a.s),
+            _ => 0.0,
         };
-        let f = if b.s > a.s {
-            (s - a.s) / (b.s - a.s)
-        } else {
-            0.0
-        };
-        Self::between(a, b, f, self.start_time + a.t, s)
+        Some((a, b, f, s))
     }
 
     /// Absolute time \[s\] at which the plan first reaches arc length `s`: the start

@@ -18,36 +18,6 @@ const HOLD_TRIES: usize = 8;
 /// How finely the wait is chosen \[s\].
 const WAIT_STEP: f64 = 0.5;
 
-/// The path point at arc length `s`, every field interpolated between its
-/// neighbours (`t` and `wait` are left for [`Trajectory::new`]).
-fn point_at_s(tr: &Trajectory, s: f64) -> PathPoint {
-    let pts = &tr.points;
-    let i = pts.partition_point(|p| p.s <= s).clamp(1, pts.len());
-    let a = pts[i - 1];
-    let Some(b) = pts.get(i) else {
-        return PathPoint { t: 0.0, ..a };
-    };
-    let f = if b.s > a.s {
-        ((s - a.s) / (b.s - a.s)).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let lerp = |u: f64, v: f64| u + (v - u) * f;
-    PathPoint {
-        x: lerp(a.x, b.x),
-        y: lerp(a.y, b.y),
-        ground: lerp(a.ground, b.ground),
-        head_height: lerp(a.head_height, b.head_height),
-        s,
-        curvature: lerp(a.curvature, b.curvature),
-        slope: lerp(a.slope, b.slope),
-        v_cap: lerp(a.v_cap, b.v_cap),
-        v: lerp(a.v, b.v),
-        t: 0.0,
-        wait: 0.0,
-    }
-}
-
 /// `old` from `now` on, brought to rest at its arc length `s_hold`, held there for
 /// `wait` seconds, then going on at `old`'s speeds: it brakes at no more than
 /// `decel` and starts again at no more than `accel` \[m/s^2\]. `None` when it cannot
@@ -68,7 +38,7 @@ pub(crate) fn hold(
     }
     let mut pts = vec![PathPoint {
         v: v0,
-        ..point_at_s(old, s0)
+        ..old.point_at_s(s0)
     }];
     let mut push = |p: PathPoint| {
         if p.s > pts.last().map_or(f64::NEG_INFINITY, |q: &PathPoint| q.s) {
@@ -78,7 +48,7 @@ pub(crate) fn hold(
     for p in old.points.iter().filter(|p| p.s < s_hold) {
         push(*p);
     }
-    let stop = point_at_s(old, s_hold);
+    let stop = old.point_at_s(s_hold);
     push(stop);
     for p in old.points.iter().filter(|p| p.s > s_hold) {
         push(*p);
