@@ -149,6 +149,48 @@ fn pyramid_random_dynamic_are_deterministic_and_merge() {
     );
 }
 
+/// `--seeds` runs the tours it names, in its order, each exactly as in the sweep of
+/// consecutive seeds that holds it (a bench of lost tours replays them).
+#[test]
+fn a_sweep_over_listed_seeds_runs_those_tours_as_the_full_sweep_does() {
+    let full = tmp("seeds-full");
+    eval::run(
+        &RandomScenes::new(3, 11, &[]).unwrap(),
+        &opts(&full, 1, Shard::ALL),
+    )
+    .unwrap();
+    let listed = tmp("seeds-listed");
+    let bench = RandomScenes::new(50, 0, &[])
+        .unwrap()
+        .with_seeds(&[13, 11])
+        .unwrap();
+    eval::run(&bench, &opts(&listed, 1, Shard::ALL)).unwrap();
+    let (a, b) = (read_runs(&full), read_runs(&listed));
+    assert_eq!(b.rows.len(), 2);
+    // Every column but the first, the job's index in its sweep.
+    for (rb, ra) in [(0, 2), (1, 0)] {
+        assert_eq!(
+            b.rows[rb][1..],
+            a.rows[ra][1..],
+            "seed {}",
+            a.str(ra, "scene_seed").unwrap()
+        );
+    }
+    let md = std::fs::read_to_string(listed.join("random.md")).unwrap();
+    assert!(md.contains("--seeds 13,11 "), "{md}");
+    assert!(md.contains("2 random scenes (seeds 13, 11)"), "{md}");
+    for (seeds, needle) in [
+        (&[][..], "at least one seed"),
+        (&[4, 9, 4][..], "seed 4 given twice"),
+    ] {
+        let err = RandomScenes::new(1, 0, &[])
+            .unwrap()
+            .with_seeds(seeds)
+            .unwrap_err();
+        assert!(err.to_string().contains(needle), "{err}");
+    }
+}
+
 #[test]
 fn merge_refuses_shards_of_different_sweeps() {
     let a = tmp("diff-a");
@@ -173,12 +215,14 @@ fn plamo(args: &[&str]) -> (bool, String) {
 
 #[test]
 fn bad_arguments_are_refused_by_name() {
-    let cases: [(&[&str], &str); 7] = [
+    let cases: [(&[&str], &str); 9] = [
         (&["eval", "slalom", "--shard", "3/2"], "1 <= i <= n"),
         (&["eval", "slalom", "--qp", "1:2"], "V_MAX:A_LAT:A_MAX"),
         (&["eval", "slalom", "--qp", "2:1:1:0.5"], "A_MIN"),
         (&["eval", "slalom", "--runs", "0"], "--runs 0"),
         (&["eval", "random", "--scenes", "0"], "--scenes 0"),
+        (&["eval", "random", "--seeds", "3,3"], "seed 3 given twice"),
+        (&["eval", "random", "--seeds", "3", "--seed", "4"], "--seed"),
         (&["eval", "pyramid", "--c=-1"], "terrain preference"),
         (&["eval", "dynamic", "--physics", "bullet"], "bullet"),
     ];

@@ -174,6 +174,11 @@ pub struct RandomArgs {
     /// default all four, the paper's tours). `--forms crawl`: every leg crawls.
     #[arg(long, value_delimiter = ',')]
     forms: Vec<String>,
+    /// Scene seeds to run, comma-separated, instead of `--scenes` from `--seed`
+    /// (e.g. the tours a sweep lost, as a bench; `plamo eval compare` pairs them with
+    /// the full sweep's).
+    #[arg(long, value_delimiter = ',', conflicts_with_all = ["scenes", "seed"])]
+    seeds: Vec<u64>,
 }
 
 /// Arguments of `plamo eval dynamic`.
@@ -309,7 +314,13 @@ pub fn run(cmd: EvalCommand) -> anyhow::Result<ExitCode> {
             )?,
             &a.sweep,
         ),
-        EvalCommand::Random(a) => sweep(&RandomScenes::new(a.scenes, a.seed, &a.forms)?, &a.sweep),
+        EvalCommand::Random(a) => {
+            let mut e = RandomScenes::new(a.scenes, a.seed, &a.forms)?;
+            if !a.seeds.is_empty() {
+                e = e.with_seeds(&a.seeds)?;
+            }
+            sweep(&e, &a.sweep)
+        }
         EvalCommand::Dynamic(a) => sweep(&Dynamic::new(a.scenes, a.seed)?, &a.sweep),
         EvalCommand::Merge(a) => report(eval::merge(&a.dirs, &a.out), &a.out),
         EvalCommand::Compare(a) => {

@@ -54,6 +54,11 @@ pub struct RandomScenes {
     /// crawls); with all four the tours are the paper's.
     #[serde(default = "default_forms")]
     pub forms: Vec<String>,
+    /// The scene seeds, when given one by one (`--seeds`) rather than as `scenes`
+    /// consecutive seeds from `seed`: the tours a sweep lost, say, run again as a
+    /// bench. Empty: `seed`..`seed + scenes`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub seeds: Vec<u64>,
 }
 
 fn default_forms() -> Vec<String> {
@@ -87,6 +92,23 @@ impl RandomScenes {
             scenes,
             seed,
             forms,
+            seeds: Vec::new(),
+        })
+    }
+
+    /// The same sweep over the scene seeds `seeds`, each once, in the order given.
+    pub fn with_seeds(self, seeds: &[u64]) -> anyhow::Result<Self> {
+        let Some(&first) = seeds.first() else {
+            bail!("--seeds: need at least one seed");
+        };
+        if let Some(i) = (1..seeds.len()).find(|&i| seeds[..i].contains(&seeds[i])) {
+            bail!("--seeds: seed {} given twice", seeds[i]);
+        }
+        Ok(Self {
+            scenes: seeds.len(),
+            seed: first,
+            seeds: seeds.to_vec(),
+            ..self
         })
     }
 
@@ -441,6 +463,9 @@ impl Experiment for RandomScenes {
     }
 
     fn jobs(&self) -> anyhow::Result<Vec<Self::Job>> {
+        if !self.seeds.is_empty() {
+            return Ok(self.seeds.clone());
+        }
         Ok((0..self.scenes as u64)
             .map(|k| self.seed.wrapping_add(k))
             .collect())
@@ -550,20 +575,33 @@ impl Experiment for RandomScenes {
         }
         let (lo, hi) = wilson(counts[0], n, Z95);
         let rate = counts[0] as f64 / n.max(1) as f64;
-        let mut args = format!(" --scenes {} --seed {}", self.scenes, self.seed);
+        let (mut args, which) = if self.seeds.is_empty() {
+            (
+                format!(" --scenes {} --seed {}", self.scenes, self.seed),
+                format!(
+                    "seeds {}..{}",
+                    self.seed,
+                    self.seed + self.scenes as u64 - 1
+                ),
+            )
+        } else {
+            let list: Vec<String> = self.seeds.iter().map(u64::to_string).collect();
+            (
+                format!(" --seeds {}", list.join(",")),
+                format!("seeds {}", list.join(", ")),
+            )
+        };
         if !self.draws_all_forms() {
             args.push_str(&format!(" --forms {}", self.forms.join(",")));
         }
         let mut md = format!(
             "Command: `{}`\n\n\
-             {n} random scenes (seeds {}..{}), each a tour of its 4 landmarks in random forms \
+             {n} random scenes ({which}), each a tour of its 4 landmarks in random forms \
              ({}). Success = all four landmarks reached without a \
              fall.\n\n\
              **Success: {}/{n} = {:.0}% (95% Wilson interval {:.0}-{:.0}%)**; paper: 81%.\n\n\
              | outcome | runs | share |\n|---|---|---|\n",
             command_line(meta, &args),
-            self.seed,
-            self.seed + self.scenes as u64 - 1,
             self.forms.join(", "),
             counts[0],
             100.0 * rate,
