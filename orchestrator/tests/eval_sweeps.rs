@@ -149,16 +149,22 @@ fn pyramid_random_dynamic_are_deterministic_and_merge() {
     );
 }
 
+/// The random sweep of 3 scenes from seed 11 (rapier, 1 s each), in `tmp(name)`.
+fn random_sweep(name: &str) -> support::OutDir {
+    let out = tmp(name);
+    eval::run(
+        &RandomScenes::new(3, 11, &[]).unwrap(),
+        &opts(&out, 1, Shard::ALL),
+    )
+    .unwrap();
+    out
+}
+
 /// `--seeds` runs the tours it names, in its order, each exactly as in the sweep of
 /// consecutive seeds that holds it (a bench of lost tours replays them).
 #[test]
 fn a_sweep_over_listed_seeds_runs_those_tours_as_the_full_sweep_does() {
-    let full = tmp("seeds-full");
-    eval::run(
-        &RandomScenes::new(3, 11, &[]).unwrap(),
-        &opts(&full, 1, Shard::ALL),
-    )
-    .unwrap();
+    let full = random_sweep("seeds-full");
     let listed = tmp("seeds-listed");
     let bench = RandomScenes::new(50, 0, &[])
         .unwrap()
@@ -435,12 +441,7 @@ fn with_cause(from: &Path, to: &Path, row: usize, cause: &str) {
 
 #[test]
 fn compare_pairs_two_random_sweeps_tour_by_tour() {
-    let base = tmp("cmp-base");
-    eval::run(
-        &RandomScenes::new(3, 11, &[]).unwrap(),
-        &opts(&base, 1, Shard::ALL),
-    )
-    .unwrap();
+    let base = random_sweep("cmp-base");
     let runs = read_runs(&base);
     let seed = |r: usize| runs.str(r, "scene_seed").unwrap().to_string();
     // Runs of 1 s reach no landmark: no tour succeeds. Mark one a success in a copy.
