@@ -167,8 +167,8 @@ impl Trajectory {
     }
 
     /// The path point at arc length `s` (clamped to the path), every field
-    /// interpolated between its neighbours; `t` and `wait` are 0, for
-    /// [`Trajectory::new`] to fill.
+    /// interpolated between its neighbours; `t` is 0, for [`Trajectory::new`] to
+    /// fill, and so is `wait` but at the path's end, which is its last point as it is.
     pub(crate) fn point_at_s(&self, s: f64) -> PathPoint {
         let Some((a, b, f, s)) = self.segment_at_s(s) else {
             return PathPoint::default();

@@ -96,7 +96,9 @@ impl RandomScenes {
         })
     }
 
-    /// The same sweep over the scene seeds `seeds`, each once, in the order given.
+    /// The same sweep over the scene seeds `seeds`, each once, in the order given;
+    /// `scenes` and `seed` then count them and name the first, as the folder's
+    /// eval.json shows them.
     pub fn with_seeds(self, seeds: &[u64]) -> anyhow::Result<Self> {
         let Some(&first) = seeds.first() else {
             bail!("--seeds: need at least one seed");
