@@ -128,6 +128,9 @@ pub struct Planner {
     current: Option<Arc<Trajectory>>,
     last_tick: Option<Tick>,
     finished: bool,
+    /// Head (x, y) at the current instruction's last lag re-plan (see
+    /// `stuck_distance`).
+    lag_head: Option<[f64; 2]>,
 }
 
 /// Distance from (x, y) to a region, 0 inside \[m\].
@@ -175,6 +178,7 @@ impl Planner {
             current: None,
             last_tick: None,
             finished: false,
+            lag_head: None,
         };
         p.route = p.plan_route(start)?;
         Ok(p)
@@ -816,6 +820,7 @@ impl Planner {
             reached = true;
             self.index += 1;
             self.current = None;
+            self.lag_head = None;
             if self.index >= self.instructions.len() {
                 self.finished = true;
             }
@@ -854,8 +859,19 @@ impl Planner {
             }
         }
         if let Some(reason) = full_reason {
-            match self.plan_instruction(self.index, [hx, hy], speed, now, &SearchLimits::default())
-            {
+            let mut from = [hx, hy];
+            if reason == ReplanReason::Lag {
+                // Lagging again where it lagged before: the head is held (against a
+                // wall's end, say) and a plan from it would be the same again.
+                let stuck = self
+                    .lag_head
+                    .is_some_and(|[x, y]| (x - hx).hypot(y - hy) < self.settings.stuck_distance);
+                if stuck {
+                    from = [input.root[0], input.root[1]];
+                }
+                self.lag_head = Some([hx, hy]);
+            }
+            match self.plan_instruction(self.index, from, speed, now, &SearchLimits::default()) {
                 Ok(tr) => {
                     self.current = Some(Arc::new(tr));
                     replanned = Some(reason);

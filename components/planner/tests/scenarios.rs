@@ -1052,3 +1052,56 @@ fn beyond_the_papers_horizon_a_crawler_only_waits() {
         assert!(c.time <= now + horizon + 1e-9, "{now}: {c:?}");
     }
 }
+
+/// Where each lag re-plan's path starts, for a humanoid held still with its head at
+/// `head` and its root at `root` for 20 s of a walk down the empty corridor.
+fn lag_replan_starts(settings: PlannerSettings, head: [f64; 2], root: [f64; 2]) -> Vec<[f64; 2]> {
+    let mut p = Planner::new(empty_corridor(), "walk from the a to the b", head, settings).unwrap();
+    let mut starts = Vec::new();
+    for tick in 0..120 * 20 {
+        let out = p
+            .plan_step(
+                Tick(tick),
+                &PlannerInput {
+                    head: [head[0], head[1], 1.5],
+                    root: [root[0], root[1], 0.9],
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+        if out.replanned == Some(ReplanReason::Lag) {
+            let first = &p.current().unwrap().points[0];
+            starts.push([first.x, first.y]);
+        }
+    }
+    starts
+}
+
+#[test]
+fn a_head_held_where_it_lagged_before_is_replanned_from_the_root() {
+    // The head 0.4 m ahead of the root, as a body pinned at a wall's end leans past it.
+    let (head, root) = ([2.4, 5.0], [2.0, 5.0]);
+    let near = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-6;
+    let on = PlannerSettings {
+        stuck_distance: 0.3,
+        ..Default::default()
+    };
+    let starts = lag_replan_starts(on, head, root);
+    assert!(starts.len() >= 3, "lag re-plans: {starts:?}");
+    // The first lag re-plan has nothing to compare with: from the head.
+    assert!(near(starts[0], head), "{starts:?}");
+    // Every later one finds the head where it was: from the root.
+    assert!(starts[1..].iter().all(|&s| near(s, root)), "{starts:?}");
+    let off = lag_replan_starts(
+        PlannerSettings {
+            stuck_distance: 0.0,
+            ..Default::default()
+        },
+        head,
+        root,
+    );
+    assert!(
+        off.iter().all(|&s| near(s, head)),
+        "stuck_distance 0: {off:?}"
+    );
+}
